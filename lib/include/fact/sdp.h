@@ -1,0 +1,99 @@
+// The block-constrained SDP that every rotation estimate in fact reduces to:
+//
+//     minimize ⟨C, X⟩   subject to   X ⪰ 0,   X_ii = I_d for every d×d diagonal block.
+//
+// C is n×n real symmetric with n = d·N (N blocks, one per drone). d = 2 is the
+// real SO(2)/O(2) relaxation the paper uses; d = 1 is the MaxCut-type problem.
+// The complex U(1) form (Hermitian N×N, unit diagonal) is solved through its real
+// embedding with d = 2 (see complex_form / real_embedding below).
+//
+// The solver is written here (no MOSEK, SDPA or CSDP). Every solve returns a
+// Result that says how sure it is: a dual certificate Λ (block diagonal), the
+// minimum eigenvalue of S = C − Λ, a rigorous dual bound, the duality gap, the
+// numerical rank of X and the eigen-gap used to decide uniqueness.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+namespace fact::sdp {
+
+enum class Status {
+  certified_unique,      // X is optimal (S ⪰ 0, small gap) and S has nullity exactly d
+  certified_not_unique,  // X is optimal, but S has nullity > d: other optima may exist
+  not_certified,         // no certificate of optimality was found
+  invalid_input,         // C or d is unusable; reason names the field and value
+};
+const char* to_string(Status s);
+
+enum class Method {
+  automatic,       // rank-d Riemannian Newton first; interior point when that does not certify
+  low_rank,        // Burer–Monteiro Riemannian staircase with block-coordinate updates
+  interior_point,  // primal–dual path following (HKM direction, Mehrotra corrector)
+};
+const char* to_string(Method m);
+
+struct Options {
+  Method method = Method::automatic;
+  double gap_tol = 1e-9;     // largest relative duality gap that certifies (problem scaled to ‖C‖_F = 1)
+  double psd_tol = 1e-9;     // λ_min(S) ≥ −psd_tol (scaled problem) counts as S ⪰ 0
+  double null_tol = 1e-10;   // eigenvalues of scaled S below this count toward the nullity
+  int max_sweeps = 3000;     // block-coordinate sweeps per staircase level
+  int max_ipm_iterations = 80;
+  int max_rank = 0;          // largest factor rank for the staircase; 0 = Pataki bound
+  unsigned seed = 1;         // deterministic initialisation
+};
+
+struct Result {
+  Status status = Status::invalid_input;
+  std::string reason;
+  Method method_used = Method::automatic;
+  int d = 0;                 // block size
+  int blocks = 0;            // N
+  // Primal solution as a factor: X = Y Yᵀ, Y is n × r (r = columns kept).
+  Eigen::MatrixXd Y;
+  // Dual certificate: Λ_ii stacked vertically, n × d (block i is rows d·i … d·i+d−1).
+  Eigen::MatrixXd Lambda;
+  double objective = 0;      // ⟨C, X⟩ (unscaled)
+  double dual_bound = 0;     // tr Λ + n·min(0, λ_min(S) + e) (unscaled), e = 4nε‖S‖₂ the eigensolver's error bound
+  double rel_gap = 0;        // (objective − dual_bound) / max(1e-4, |objective|, |dual_bound|), scaled problem
+  double min_eig_S = 0;      // λ_min(S), S = C/‖C‖_F − Λ/‖C‖_F (scaled)
+  double eig_gap = 0;        // λ_{d+1}(S) (scaled): > null_tol means nullity ≤ d
+  int nullity = 0;           // eigenvalues of scaled S below null_tol
+  int rank = 0;              // numerical rank of X
+  int iterations = 0;        // sweeps (low rank) or Newton steps (interior point)
+  double time_ms = 0;        // wall time of the whole solve, certification included
+  double scale = 1;          // ‖C‖_F used to scale the problem
+
+  bool certified() const {
+    return status == Status::certified_unique || status == Status::certified_not_unique;
+  }
+  Eigen::MatrixXd X() const { return Y * Y.transpose(); }
+};
+
+// Solves the SDP. Never throws on bad input: returns Status::invalid_input with a reason.
+Result solve(const Eigen::MatrixXd& C, int d, const Options& options = {});
+
+// Checks C and d; returns an empty string when they are usable, otherwise the reason.
+std::string validate(const Eigen::MatrixXd& C, int d);
+
+// The tight complex (U(1)) form in real terms: Q̃ = Q + Kᵀ Q K with K = blkdiag(J, …, J),
+// J the 90° rotation. Q is 2N×2N; so is the result.
+Eigen::MatrixXd complex_form(const Eigen::MatrixXd& Q);
+
+// Real embedding of a Hermitian N×N matrix H: 2N×2N, block (i,j) = [[Re h, −Im h], [Im h, Re h]].
+// Then min ⟨H, Z⟩ over Hermitian Z ⪰ 0 with unit diagonal equals ½ of the d = 2 problem on it.
+Eigen::MatrixXd real_embedding(const Eigen::MatrixXcd& H);
+
+// Rounding (d = 2). Takes the top-2 eigenvectors of X = Y Yᵀ, fixes a reflection by a
+// determinant vote, projects each 2×2 block to SO(2) and expresses block i relative to
+// the reference block. With X_ij = R_iᵀ R_j (R_i the world-from-f_i rotation of drone i),
+// element i of the result is R_refᵀ R_i: the rotation of f_i in f_ref (element ref = I).
+// Requires a Result with d = 2 and a factor Y; throws std::invalid_argument otherwise.
+std::vector<Eigen::Matrix2d> round_rotations(const Result& result, int reference);
+
+// The angle of each rounded rotation, in (−π, π].
+std::vector<double> rotation_angles(const std::vector<Eigen::Matrix2d>& rotations);
+
+}  // namespace fact::sdp

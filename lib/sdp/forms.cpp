@@ -1,0 +1,33 @@
+// The tight complex form and the real embedding of Hermitian problems.
+#include <stdexcept>
+#include <string>
+
+#include "fact/sdp.h"
+
+namespace fact::sdp {
+
+Eigen::MatrixXd complex_form(const Eigen::MatrixXd& Q) {
+  if (Q.rows() != Q.cols() || Q.rows() % 2 != 0)
+    throw std::invalid_argument("complex_form: Q is " + std::to_string(Q.rows()) + "×" + std::to_string(Q.cols()) +
+                                ", must be 2N×2N");
+  Eigen::Matrix2d J;  // the 90° rotation
+  J << 0, -1, 1, 0;
+  Eigen::MatrixXd out = Q;
+  for (Eigen::Index i = 0; i < Q.rows(); i += 2)
+    for (Eigen::Index j = 0; j < Q.cols(); j += 2)
+      out.block<2, 2>(i, j) += J.transpose() * Q.block<2, 2>(i, j) * J;  // (Kᵀ Q K)_ij = Jᵀ Q_ij J
+  return out;
+}
+
+Eigen::MatrixXd real_embedding(const Eigen::MatrixXcd& H) {
+  if (H.rows() != H.cols()) throw std::invalid_argument("real_embedding: H must be square");
+  Eigen::MatrixXd out(2 * H.rows(), 2 * H.cols());
+  for (Eigen::Index i = 0; i < H.rows(); ++i)
+    for (Eigen::Index j = 0; j < H.cols(); ++j) {
+      const double re = H(i, j).real(), im = H(i, j).imag();
+      out.block<2, 2>(2 * i, 2 * j) << re, -im, im, re;
+    }
+  return out;
+}
+
+}  // namespace fact::sdp

@@ -1,0 +1,112 @@
+// Burer–Monteiro Riemannian staircase with block-coordinate minimisation.
+#include <cmath>
+#include <random>
+
+#include "internal.h"
+
+namespace fact::sdp::detail {
+
+int pataki_rank(int blocks, int d) {
+  const double m = blocks * d * (d + 1) / 2.0;  // number of equality constraints
+  return static_cast<int>(std::floor((std::sqrt(8.0 * m + 1.0) - 1.0) / 2.0)) + 1;
+}
+
+Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
+  if (G.rows() == 1) {
+    const double norm = G.norm();
+    return norm > 0 ? Eigen::MatrixXd(G / norm) : Eigen::MatrixXd();
+  }
+  // d = 2: M = G Gᵀ (2 × 2 SPD); M^{-1/2} = (√M)^{-1}, √M = (M + √det I)/√(tr M + 2√det).
+  const Eigen::Matrix2d M = G * G.transpose();
+  const double det = M.determinant(), tr = M.trace();
+  if (!(det > 1e-20 * tr * tr)) {  // rank-deficient: fall back to the SVD
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(G, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    if (svd.singularValues()(0) <= 0) return Eigen::MatrixXd();
+    return svd.matrixU() * svd.matrixV().transpose();
+  }
+  const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
+  const Eigen::Matrix2d root = (M + s * Eigen::Matrix2d::Identity()) / t;
+  return root.inverse() * G;
+}
+
+// One block update at fixed size D (1 or 2): hot path, fixed-size types.
+template <int D>
+static int sweeps_fixed(const Eigen::MatrixXd& C, Eigen::MatrixXd& Y, int max_sweeps, double tol) {
+  const Eigen::Index n = C.rows(), r = Y.cols();
+  Eigen::Matrix<double, D, Eigen::Dynamic> G(D, r);  // (C Y)_i − C_ii Y_i, D × r
+  int sweep = 0;
+  for (; sweep < max_sweeps; ++sweep) {
+    double max_change = 0;
+    for (Eigen::Index i = 0; i < n; i += D) {
+      G.noalias() = C.middleCols<D>(i).transpose() * Y;
+      G.noalias() -= C.block<D, D>(i, i) * Y.middleRows<D>(i);
+      const Eigen::MatrixXd next = polar_rows(-G);
+      if (next.size() == 0) continue;  // no information about this block: keep it
+      max_change = std::max(max_change, (next - Y.middleRows<D>(i)).cwiseAbs().maxCoeff());
+      Y.middleRows<D>(i) = next;
+    }
+    if (max_change < tol) return sweep + 1;
+  }
+  return sweep;
+}
+
+int block_coordinate_sweeps(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_sweeps, double tol) {
+  return d == 1 ? sweeps_fixed<1>(C, Y, max_sweeps, tol) : sweeps_fixed<2>(C, Y, max_sweeps, tol);
+}
+
+// Random start with orthonormal-row blocks, deterministic by seed.
+static Eigen::MatrixXd random_factor(Eigen::Index n, int d, int r, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::MatrixXd Y(n, r);
+  for (Eigen::Index i = 0; i < n; i += d) {
+    Eigen::MatrixXd block(d, r);
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b < r; ++b) block(a, b) = gauss(rng);
+    Y.middleRows(i, d) = polar_rows(block);
+  }
+  return Y;
+}
+
+// Adds one column to Y and steps along the descent direction v (the eigenvector of a
+// negative eigenvalue of S), retracting every block back to orthonormal rows.
+static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::VectorXd& v, int d, double step) {
+  Eigen::MatrixXd next(Y.rows(), Y.cols() + 1);
+  next.leftCols(Y.cols()) = Y;
+  next.col(Y.cols()) = step * v;
+  for (Eigen::Index i = 0; i < Y.rows(); i += d) next.middleRows(i, d) = polar_rows(next.middleRows(i, d));
+  return next;
+}
+
+// Spectral start: the d eigenvectors of C's smallest eigenvalues (n × d), each block
+// projected to orthonormal rows. Exact when the data are noise-free and the optimum unique.
+static Eigen::MatrixXd spectral_factor(const Eigen::MatrixXd& C, int d, unsigned seed) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
+  Eigen::MatrixXd Y = eig.eigenvectors().leftCols(d);
+  const Eigen::MatrixXd fallback = random_factor(C.rows(), d, d, seed);
+  for (Eigen::Index i = 0; i < Y.rows(); i += d) {
+    const Eigen::MatrixXd block = polar_rows(Y.middleRows(i, d));
+    Y.middleRows(i, d) = block.size() ? block : fallback.middleRows(i, d);
+  }
+  return Y;
+}
+
+LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options) {
+  const Eigen::Index n = C.rows();
+  const int blocks = static_cast<int>(n / d);
+  const int max_rank = options.max_rank > 0 ? options.max_rank : std::min<int>(pataki_rank(blocks, d), n);
+  LowRankOutcome out;
+  out.Y = spectral_factor(C, d, options.seed);
+  for (;;) {
+    if (out.Y.cols() > d) out.iterations += block_coordinate_sweeps(C, d, out.Y, options.max_sweeps, 1e-3);
+    out.iterations += newton_refine(C, d, out.Y, 60, 1e-12);
+    const Eigen::MatrixXd lambda = lambda_from_factor(C, out.Y, d);
+    out.certificate = certify(C, lambda, d, false);
+    out.certified = out.certificate.min_eig >= -options.psd_tol;
+    if (out.certified || out.Y.cols() >= max_rank) return out;
+    out.certificate = certify(C, lambda, d, true);  // the escape direction needs the eigenvector
+    out.Y = escape_saddle(out.Y, out.certificate.min_vector, d, 0.1);
+  }
+}
+
+}  // namespace fact::sdp::detail

@@ -1,0 +1,153 @@
+// The SDP solve: validate, scale, primal solve (low rank, then interior point if needed),
+// certify, and classify. Each step is a named piece in internal.h.
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "internal.h"
+
+namespace fact::sdp {
+namespace {
+
+using detail::Certificate;
+
+struct Candidate {
+  Eigen::MatrixXd Y;      // n × r factor of X
+  Certificate cert;       // certificate for it (scaled problem)
+  int iterations = 0;
+  Method method = Method::low_rank;
+  std::string note;       // why the method stopped, when it did not converge
+};
+
+// Gap relative to the objective, on the scaled problem (‖C‖_F = 1); the floor 1e-4 keeps
+// zero-optimum (noise-free) problems from dividing by nothing.
+double relative_gap(double primal, double dual) {
+  return (primal - dual) / std::max({1e-4, std::abs(primal), std::abs(dual)});
+}
+
+// ⟨C, Y Yᵀ⟩ for a feasible Y (every block of Y Yᵀ is I), computed as tr Λ + ⟨S, Y Yᵀ⟩.
+// The two are equal in exact arithmetic; the second has no cancellation, because S and
+// Y Yᵀ are both PSD, so the gap ⟨S, Y Yᵀ⟩ stays accurate when the optimum is small.
+double primal_objective(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, const Certificate& cert, int d) {
+  const Eigen::MatrixXd SY = detail::certificate_matrix(C, cert.lambda, d) * Y;  // n × r
+  return cert.trace_lambda + Y.cwiseProduct(SY).sum();
+}
+
+bool is_certified(const Eigen::MatrixXd& C, const Candidate& c, int d, const Options& o) {
+  return c.cert.min_eig >= -o.psd_tol &&
+         relative_gap(primal_objective(C, c.Y, c.cert, d), c.cert.dual_bound) <= o.gap_tol;
+}
+
+// In automatic mode the low-rank path only tries rank d (the tight case); a problem that
+// does not certify there goes to the interior point, which measures faster than climbing
+// the staircase on high-rank optima.
+Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
+  if (o.method == Method::automatic) o.max_rank = d;
+  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o);
+  return {std::move(lr.Y), std::move(lr.certificate), lr.iterations, Method::low_rank, {}};
+}
+
+Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o) {
+  detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o);
+  Candidate c;
+  c.Y = detail::factor_psd(ip.X, 0.0);
+  c.cert = detail::certify(C, ip.lambda, d, false);
+  c.iterations = ip.iterations;
+  c.method = Method::interior_point;
+  c.note = ip.reason;
+  return c;
+}
+
+// Interior point to a moderate gap, then Riemannian Newton at the rank it found. The interior
+// point finds the rank of a high-rank optimum reliably, but its last digits are limited by
+// the conditioning of Z⁻¹; Newton converges quadratically from there.
+Candidate from_interior_point_polished(const Eigen::MatrixXd& C, int d, Options o) {
+  o.gap_tol = std::max(o.gap_tol, 1e-7);
+  const detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o);
+  Candidate c;
+  c.Y = detail::factor_psd(ip.X, 1e-6);
+  for (Eigen::Index i = 0; i < c.Y.rows(); i += d) {
+    const Eigen::MatrixXd block = detail::polar_rows(c.Y.middleRows(i, d));
+    if (block.size() == 0 || c.Y.cols() < d) return from_interior_point(C, d, o);
+    c.Y.middleRows(i, d) = block;
+  }
+  c.iterations = ip.iterations + detail::newton_refine(C, d, c.Y, 60, 1e-12);
+  c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
+  c.method = Method::interior_point;
+  c.note = ip.reason;
+  return c;
+}
+
+int numerical_rank(const Eigen::MatrixXd& Y) {
+  if (Y.cols() == 0) return 0;
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(Y).singularValues();
+  int r = 0;
+  while (r < s.size() && s[r] > 1e-4 * s[0]) ++r;
+  return r;
+}
+
+void classify(Result& r, const Candidate& c, const Options& o) {
+  const Eigen::VectorXd& ev = c.cert.eigenvalues;
+  r.nullity = static_cast<int>((ev.array() < o.null_tol).count());
+  r.eig_gap = ev.size() > r.d ? ev[r.d] : 0.0;
+  std::ostringstream why;
+  if (r.min_eig_S < -o.psd_tol) {
+    why << "S = C − Λ has λ_min = " << r.min_eig_S << " < −" << o.psd_tol << " after " << r.iterations << " "
+        << to_string(c.method) << " iterations";
+    if (!c.note.empty()) why << " (" << c.note << ")";
+    r.status = Status::not_certified;
+  } else if (r.rel_gap > o.gap_tol) {
+    why << "relative duality gap " << r.rel_gap << " > " << o.gap_tol;
+    if (!c.note.empty()) why << " (" << c.note << ")";
+    r.status = Status::not_certified;
+  } else if (r.nullity != r.d) {
+    why << "optimal, but S has nullity " << r.nullity << " > d = " << r.d << " (λ_" << r.d + 1 << "(S) = " << r.eig_gap
+        << " < " << o.null_tol << "): the optimum is not unique; X has rank " << r.rank;
+    r.status = Status::certified_not_unique;
+  } else {
+    why << "optimal and unique: λ_min(S) = " << r.min_eig_S << ", nullity " << r.nullity << ", λ_" << r.d + 1
+        << "(S) = " << r.eig_gap;
+    r.status = Status::certified_unique;
+  }
+  r.reason = why.str();
+}
+
+}  // namespace
+
+Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Result r;
+  r.d = d;
+  r.reason = validate(C, d);
+  if (!r.reason.empty()) return r;
+  r.blocks = static_cast<int>(C.rows() / d);
+  r.scale = C.norm() > 0 ? C.norm() : 1.0;
+  const Eigen::MatrixXd Cs = C / r.scale;  // scaled problem, ‖Cs‖_F = 1 (or C = 0)
+
+  Candidate best;
+  const bool try_low_rank = options.method != Method::interior_point;
+  if (try_low_rank) best = from_low_rank(Cs, d, options);
+  if (options.method == Method::interior_point ||
+      (options.method == Method::automatic && !is_certified(Cs, best, d, options))) {
+    Candidate ip = options.method == Method::automatic ? from_interior_point_polished(Cs, d, options)
+                                                       : from_interior_point(Cs, d, options);
+    ip.iterations += best.iterations;
+    if (!try_low_rank || is_certified(Cs, ip, d, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
+  }
+
+  const double primal = primal_objective(Cs, best.Y, best.cert, d);
+  r.method_used = best.method;
+  r.Y = best.Y;
+  r.Lambda = best.cert.lambda * r.scale;
+  r.objective = primal * r.scale;
+  r.dual_bound = best.cert.dual_bound * r.scale;
+  r.rel_gap = relative_gap(primal, best.cert.dual_bound);
+  r.min_eig_S = best.cert.min_eig;
+  r.rank = numerical_rank(best.Y);
+  r.iterations = best.iterations;
+  classify(r, best, options);
+  r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace fact::sdp

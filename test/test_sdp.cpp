@@ -1,0 +1,552 @@
+// Tests of fact::sdp::solve and its helpers on
+//     minimize ⟨C, X⟩  s.t.  X ⪰ 0,  X_ii = I_d  (C n×n symmetric, n = d·N).
+// Every expected value is computed independently of the solver: closed forms for N = 2,
+// planted rank-d optima (noise-free rotation costs, phase-synchronisation Laplacians) and the
+// optima of SDPA and CSDP stored in test/data/sdp/optima.csv.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fact/rotation_cost.h"
+#include "fact/sdp.h"
+#include "sdpa_sparse_reader.h"
+
+namespace fact::sdp {
+// Lets GoogleTest print statuses by name in failure messages.
+void PrintTo(Status s, std::ostream* os) { *os << to_string(s); }
+}  // namespace fact::sdp
+
+namespace {
+
+using fact::sdp::Method;
+using fact::sdp::Options;
+using fact::sdp::Result;
+using fact::sdp::Status;
+
+// Deterministic n×m matrix of standard normal entries.
+Eigen::MatrixXd gaussian(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd m(rows, cols);
+  for (Eigen::Index j = 0; j < cols; ++j)
+    for (Eigen::Index i = 0; i < rows; ++i) m(i, j) = g(rng);
+  return m;
+}
+
+Eigen::MatrixXd random_psd(Eigen::Index n, unsigned seed) {
+  const Eigen::MatrixXd g = gaussian(n, n, seed);
+  return g * g.transpose();
+}
+
+Eigen::MatrixXd random_symmetric(Eigen::Index n, unsigned seed) {
+  const Eigen::MatrixXd g = gaussian(n, n, seed);
+  return 0.5 * (g + g.transpose());
+}
+
+// Angle wrapped to (−π, π].
+double wrap(double a) {
+  a = std::remainder(a, 2.0 * M_PI);
+  if (a <= -M_PI) a += 2.0 * M_PI;
+  return a;
+}
+
+double rel_tol(double tol, double reference) { return tol * std::max(1.0, std::abs(reference)); }
+
+// Properties every certified result must have, recomputed from Y and Λ.
+void expect_certificate(const Eigen::MatrixXd& C, int d, const Result& r) {
+  ASSERT_TRUE(r.certified()) << fact::sdp::to_string(r.status) << ": " << r.reason;
+  const Eigen::Index n = C.rows();
+  ASSERT_EQ(r.Y.rows(), n);
+  ASSERT_EQ(r.Lambda.rows(), n);
+  ASSERT_EQ(r.Lambda.cols(), d);
+  EXPECT_EQ(r.d, d);
+  EXPECT_EQ(r.blocks, n / d);
+  // Duality: weak duality and the certified gap.
+  EXPECT_LE(r.dual_bound, r.objective + rel_tol(1e-9, r.objective))
+      << "dual_bound " << r.dual_bound << " objective " << r.objective;
+  EXPECT_LE(r.rel_gap, 1e-9);
+  EXPECT_GE(r.min_eig_S, -1e-9);
+  // Primal feasibility and the reported objective.
+  const Eigen::MatrixXd X = r.X();
+  for (Eigen::Index i = 0; i < n; i += d)
+    EXPECT_LE((X.block(i, i, d, d) - Eigen::MatrixXd::Identity(d, d)).cwiseAbs().maxCoeff(), 1e-7)
+        << "diagonal block at " << i;
+  EXPECT_NEAR(r.objective, (C.cwiseProduct(X)).sum(), rel_tol(1e-9, r.objective) * std::max(1.0, C.norm()));
+  // The dual bound is tr Λ + n·min(0, λ_min(S) + e) with S = C − blkdiag(Λ) (unscaled) and e
+  // the eigensolver's error bound (O(n ε ‖S‖), far inside the tolerance below).
+  Eigen::MatrixXd S = C;
+  for (Eigen::Index i = 0; i < n; i += d) S.block(i, i, d, d) -= r.Lambda.middleRows(i, d);
+  EXPECT_LE((S - S.transpose()).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, C.norm()));
+  const double lmin = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S, Eigen::EigenvaluesOnly).eigenvalues()(0);
+  double trace_lambda = 0;
+  for (Eigen::Index i = 0; i < n; i += d) trace_lambda += r.Lambda.middleRows(i, d).trace();
+  EXPECT_NEAR(r.dual_bound, trace_lambda + static_cast<double>(n) * std::min(0.0, lmin),
+              1e-9 * std::max(1.0, C.norm()));
+  EXPECT_NEAR(lmin / r.scale, r.min_eig_S, 1e-9);
+}
+
+// ---------------------------------------------------------------------------------------
+// Closed forms for N = 2.
+
+// d = 2, C = [[A, B], [Bᵀ, D]]. Feasible X = [[I, R], [Rᵀ, I]] with X ⪰ 0 ⇔ ‖R‖₂ ≤ 1, and
+// ⟨C, X⟩ = tr A + tr D + 2⟨B, R⟩. With B = U Σ Vᵀ, min over ‖R‖₂ ≤ 1 of ⟨B, R⟩ = −Σ σ_k
+// (nuclear norm, von Neumann), attained at R = −U Vᵀ (uniquely when B has full rank).
+struct TwoBlockOptimum {
+  double value;
+  Eigen::Matrix2d R;
+};
+
+TwoBlockOptimum two_block_optimum(const Eigen::MatrixXd& C) {
+  const Eigen::MatrixXd B = C.block(0, 2, 2, 2);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return {C.block<2, 2>(0, 0).trace() + C.block<2, 2>(2, 2).trace() - 2.0 * svd.singularValues().sum(),
+          -svd.matrixU() * svd.matrixV().transpose()};
+}
+
+void check_two_block(const Eigen::MatrixXd& C) {
+  const TwoBlockOptimum expected = two_block_optimum(C);
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+  EXPECT_NEAR(r.objective, expected.value, rel_tol(1e-8, expected.value));
+  EXPECT_EQ(r.rank, 2);
+  const Eigen::MatrixXd X = r.X();
+  EXPECT_LE((X.block<2, 2>(0, 2) - expected.R).cwiseAbs().maxCoeff(), 1e-6) << "X_12 =\n"
+                                                                             << X.block<2, 2>(0, 2) << "\nexpected\n"
+                                                                             << expected.R;
+  expect_certificate(C, 2, r);
+}
+
+TEST(SdpClosedForm, TwoBlocksD2PsdCostIsTraceMinusTwiceNuclearNorm) {
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    check_two_block(random_psd(4, seed));
+  }
+}
+
+TEST(SdpClosedForm, TwoBlocksD2IndefiniteCostIsTraceMinusTwiceNuclearNorm) {
+  for (unsigned seed = 101; seed <= 104; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    check_two_block(random_symmetric(4, seed));
+  }
+}
+
+// d = 1: X = [[1, x], [x, 1]], |x| ≤ 1, ⟨C, X⟩ = c11 + c22 + 2 c12 x ⇒ optimum c11 + c22 − 2|c12|
+// at x = −sign(c12).
+TEST(SdpClosedForm, TwoBlocksD1IsDiagonalMinusTwiceAbsOffDiagonal) {
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Eigen::MatrixXd C = seed % 2 ? random_psd(2, seed) : random_symmetric(2, seed);
+    const double expected = C(0, 0) + C(1, 1) - 2.0 * std::abs(C(0, 1));
+    const Result r = fact::sdp::solve(C, 1);
+    EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+    EXPECT_NEAR(r.objective, expected, rel_tol(1e-8, expected));
+    EXPECT_NEAR(r.X()(0, 1), C(0, 1) > 0 ? -1.0 : 1.0, 1e-6);
+    expect_certificate(C, 1, r);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Exact recovery on noise-free rotation data.
+
+fact::SyntheticRounds noise_free(int drones, int rounds, std::uint64_t seed) {
+  fact::SyntheticOptions o;
+  o.drones = drones;
+  o.rounds = rounds;
+  o.noise = 0.0;
+  o.seed = seed;
+  return fact::make_synthetic_rounds(o);
+}
+
+void expect_yaws_recovered(const Result& r, const std::vector<double>& yaw) {
+  const std::vector<double> angles = fact::sdp::rotation_angles(fact::sdp::round_rotations(r, 0));
+  ASSERT_EQ(angles.size(), yaw.size());
+  for (std::size_t i = 0; i < yaw.size(); ++i)
+    EXPECT_NEAR(wrap(angles[i] - (yaw[i] - yaw[0])), 0.0, 1e-6)
+        << "drone " << i << ": got " << angles[i] << ", truth " << wrap(yaw[i] - yaw[0]);
+}
+
+TEST(SdpRecovery, ComplexFormNoiseFreeIsUniqueRankTwoAndRecoversYaws) {
+  for (int n = 3; n <= 8; ++n) {
+    SCOPED_TRACE("N = " + std::to_string(n));
+    const fact::SyntheticRounds s = noise_free(n, n + 1, 10 + n);
+    const Eigen::MatrixXd C = fact::sdp::complex_form(fact::paper_cost(s.sums));
+    const Result r = fact::sdp::solve(C, 2);
+    EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+    EXPECT_EQ(r.rank, 2);
+    EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+    expect_yaws_recovered(r, s.yaw);
+    expect_certificate(C, 2, r);
+  }
+}
+
+TEST(SdpRecovery, PlainFormNoiseFreeWithTwoNRoundsRecoversYaws) {
+  for (int n = 3; n <= 8; ++n) {
+    SCOPED_TRACE("N = " + std::to_string(n));
+    const fact::SyntheticRounds s = noise_free(n, 2 * n, 20 + n);
+    const Eigen::MatrixXd C = fact::paper_cost(s.sums);
+    const Result r = fact::sdp::solve(C, 2);
+    EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+    EXPECT_EQ(r.rank, 2);
+    EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+    expect_yaws_recovered(r, s.yaw);
+    expect_certificate(C, 2, r);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Real embedding of a Hermitian problem.
+//
+// With z_k = e^{iφ_k}, a connected graph and weights w_kl > 0, H = Deg − W, W_kl = w_kl z_k z̄_l,
+// is unitarily similar to the graph Laplacian: H ⪰ 0 with null space span{z}. So
+// min ⟨H, Z⟩ over Hermitian Z ⪰ 0, Z_kk = 1 is 0, attained only by Z = z z*. Adding a real
+// diagonal Δ shifts the optimum by tr Δ (Z_kk = 1) without moving the optimiser. The real
+// embedding doubles the optimum, and its unique optimum is X with 2×2 blocks
+// X_kl = [[Re Z_kl, −Im Z_kl], [Im Z_kl, Re Z_kl]] = rot(φ_k − φ_l).
+struct PhaseInstance {
+  Eigen::MatrixXcd H;
+  std::vector<double> phi;
+};
+
+PhaseInstance phase_laplacian() {
+  const std::vector<double> phi = {0.3, -2.1, 1.7, 2.9};
+  const std::vector<std::pair<int, int>> edges = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 2}};
+  const std::vector<double> weight = {1.0, 0.5, 2.0, 1.5, 0.8};
+  Eigen::MatrixXcd H = Eigen::MatrixXcd::Zero(4, 4);
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto [k, l] = edges[e];
+    const std::complex<double> zk = std::polar(1.0, phi[k]), zl = std::polar(1.0, phi[l]);
+    H(k, l) -= weight[e] * zk * std::conj(zl);
+    H(l, k) -= weight[e] * zl * std::conj(zk);
+    H(k, k) += weight[e];
+    H(l, l) += weight[e];
+  }
+  return {H, phi};
+}
+
+TEST(SdpRealEmbedding, PhaseLaplacianHasZeroOptimumAttainedByThePhases) {
+  const PhaseInstance inst = phase_laplacian();
+  // Sanity of the construction itself: H z = 0, H ⪰ 0 with a one-dimensional null space.
+  Eigen::VectorXcd z(4);
+  for (int k = 0; k < 4; ++k) z(k) = std::polar(1.0, inst.phi[k]);
+  ASSERT_LE((inst.H * z).norm(), 1e-12);
+  const Eigen::VectorXd hev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(inst.H).eigenvalues();
+  ASSERT_NEAR(hev(0), 0.0, 1e-12);
+  ASSERT_GT(hev(1), 0.1);
+
+  const Eigen::MatrixXd C = fact::sdp::real_embedding(inst.H);
+  ASSERT_LE((C - C.transpose()).cwiseAbs().maxCoeff(), 1e-15);
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+  EXPECT_EQ(r.rank, 2);
+  EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+  expect_certificate(C, 2, r);
+
+  // The optimum is the embedding of z z*: block (k,l) = rot(φ_k − φ_l).
+  const Eigen::MatrixXd X = r.X();
+  for (int k = 0; k < 4; ++k)
+    for (int l = 0; l < 4; ++l) {
+      const Eigen::Matrix2d expected = Eigen::Rotation2Dd(inst.phi[k] - inst.phi[l]).toRotationMatrix();
+      EXPECT_LE((X.block<2, 2>(2 * k, 2 * l) - expected).cwiseAbs().maxCoeff(), 1e-6) << "block " << k << "," << l;
+    }
+  // In sdp.h's convention X_kl = R_kᵀ R_l, so R_k = rot(−φ_k) and round_rotations(·, 0)[k] =
+  // R_0ᵀ R_k = rot(φ_0 − φ_k): the phases up to the global phase φ_0, with the sign flipped.
+  const std::vector<double> angles = fact::sdp::rotation_angles(fact::sdp::round_rotations(r, 0));
+  ASSERT_EQ(angles.size(), 4u);
+  for (int k = 0; k < 4; ++k)
+    EXPECT_NEAR(wrap(angles[k] - (inst.phi[0] - inst.phi[k])), 0.0, 1e-6) << "phase " << k;
+}
+
+TEST(SdpRealEmbedding, ObjectiveIsTwiceTheComplexOptimum) {
+  const PhaseInstance inst = phase_laplacian();
+  const std::vector<double> shift = {0.4, 1.3, -0.2, 2.5};  // complex optimum = Σ shift = 4.0
+  Eigen::MatrixXcd H = inst.H;
+  double complex_optimum = 0;
+  for (int k = 0; k < 4; ++k) {
+    H(k, k) += shift[k];
+    complex_optimum += shift[k];
+  }
+  const Eigen::MatrixXd C = fact::sdp::real_embedding(H);
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.status, Status::certified_unique) << r.reason;
+  EXPECT_NEAR(r.objective, 2.0 * complex_optimum, rel_tol(1e-8, 2.0 * complex_optimum));
+  expect_certificate(C, 2, r);
+  const std::vector<double> angles = fact::sdp::rotation_angles(fact::sdp::round_rotations(r, 2));
+  for (int k = 0; k < 4; ++k)
+    EXPECT_NEAR(wrap(angles[k] - (inst.phi[2] - inst.phi[k])), 0.0, 1e-6) << "phase " << k;
+}
+
+TEST(SdpRealEmbedding, BlocksFollowTheDocumentedLayout) {
+  Eigen::MatrixXcd H(2, 2);
+  H << std::complex<double>(2, 0), std::complex<double>(0.5, -1.5), std::complex<double>(0.5, 1.5),
+      std::complex<double>(3, 0);
+  const Eigen::MatrixXd C = fact::sdp::real_embedding(H);
+  ASSERT_EQ(C.rows(), 4);
+  ASSERT_EQ(C.cols(), 4);
+  Eigen::Matrix2d b01;
+  b01 << 0.5, 1.5, -1.5, 0.5;  // [[Re h, −Im h], [Im h, Re h]] for h = 0.5 − 1.5i
+  EXPECT_EQ(Eigen::Matrix2d(C.block<2, 2>(0, 2)), b01);
+  EXPECT_EQ(Eigen::Matrix2d(C.block<2, 2>(0, 0)), (2.0 * Eigen::Matrix2d::Identity()).eval());
+  EXPECT_EQ(C, C.transpose());
+}
+
+// ---------------------------------------------------------------------------------------
+// Agreement with the optima of SDPA and CSDP (test/data/sdp/optima.csv).
+
+struct PeerRow {
+  std::string name;
+  int n = 0, d = 0;
+  double sdpa = 0, csdp = 0, csdp_binary = 0;
+};
+
+std::vector<PeerRow> load_peer_optima() {
+  std::vector<PeerRow> rows;
+  std::ifstream in(std::string(FACT_TEST_DATA) + "/sdp/optima.csv");
+  std::string line;
+  if (!std::getline(in, line)) return rows;  // header
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+    if (f.size() != 6) return {};
+    rows.push_back({f[0], std::stoi(f[1]), std::stoi(f[2]), std::stod(f[3]), std::stod(f[4]), std::stod(f[5])});
+  }
+  return rows;
+}
+
+TEST(SdpPeers, OptimaTableIsReadable) {
+  std::ifstream in(std::string(FACT_TEST_DATA) + "/sdp/optima.csv");
+  std::string header;
+  ASSERT_TRUE(std::getline(in, header)) << FACT_TEST_DATA "/sdp/optima.csv";
+  EXPECT_EQ(header, "name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective");
+  EXPECT_EQ(load_peer_optima().size(), 12u);
+}
+
+void PrintTo(const PeerRow& row, std::ostream* os) { *os << row.name; }
+
+class SdpPeerAgreement : public ::testing::TestWithParam<PeerRow> {};
+
+TEST_P(SdpPeerAgreement, MatchesSdpaAndCsdp) {
+  const PeerRow& row = GetParam();
+  int d = 0;
+  const Eigen::MatrixXd C = fact::test::read_sdpa_sparse(std::string(FACT_TEST_DATA) + "/sdp/" + row.name + ".dat-s", &d);
+  ASSERT_EQ(C.rows(), row.n);
+  ASSERT_EQ(d, row.d);
+  const Result r = fact::sdp::solve(C, d);
+  EXPECT_TRUE(r.certified()) << fact::sdp::to_string(r.status) << ": " << r.reason;
+  EXPECT_NEAR(r.objective, row.sdpa, rel_tol(1e-6, row.sdpa)) << "SDPA";
+  EXPECT_NEAR(r.objective, row.csdp, rel_tol(1e-6, row.csdp)) << "CSDP library";
+  EXPECT_NEAR(r.objective, row.csdp_binary, rel_tol(1e-6, row.csdp_binary)) << "csdp executable (8 digits)";
+  if (r.certified()) expect_certificate(C, d, r);
+}
+
+INSTANTIATE_TEST_SUITE_P(OptimaCsv, SdpPeerAgreement, ::testing::ValuesIn(load_peer_optima()),
+                         [](const ::testing::TestParamInfo<PeerRow>& info) { return info.param.name; });
+
+// ---------------------------------------------------------------------------------------
+// Degenerate (non-unique) optima.
+
+TEST(SdpStatus, ZeroCostIsCertifiedNotUnique) {
+  const Eigen::MatrixXd C = Eigen::MatrixXd::Zero(8, 8);
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+  EXPECT_EQ(r.objective, 0.0);
+  EXPECT_GT(r.nullity, 2);
+  expect_certificate(C, 2, r);
+}
+
+TEST(SdpStatus, TooFewRoundsIsCertifiedNotUnique) {
+  const fact::SyntheticRounds s = noise_free(5, 1, 3);
+  const Eigen::MatrixXd C = fact::sdp::complex_form(fact::paper_cost(s.sums));
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+  EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+  EXPECT_GT(r.nullity, 2);
+  expect_certificate(C, 2, r);
+}
+
+TEST(SdpStatus, UncoupledD1BlocksAreCertifiedNotUnique) {
+  Eigen::MatrixXd C(2, 2);
+  C << 1.5, 0.0, 0.0, 2.5;  // ⟨C, X⟩ = 4 for every feasible X
+  const Result r = fact::sdp::solve(C, 1);
+  EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+  EXPECT_NEAR(r.objective, 4.0, 1e-9);
+  expect_certificate(C, 1, r);
+}
+
+// ---------------------------------------------------------------------------------------
+// Bad input.
+
+struct BadInput {
+  std::string label;
+  Eigen::MatrixXd C;
+  int d;
+  std::vector<std::string> reason_contains;
+};
+
+std::vector<BadInput> bad_inputs() {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<BadInput> cases;
+  Eigen::MatrixXd c = random_psd(4, 5);
+  c(1, 2) = c(2, 1) = nan;
+  cases.push_back({"NaN entry", c, 2, {"not finite", "nan"}});
+  c = random_psd(4, 5);
+  c(3, 0) = c(0, 3) = inf;
+  cases.push_back({"+inf entry", c, 2, {"not finite", "inf"}});
+  c = random_psd(4, 5);
+  c(0, 3) += 0.25;
+  cases.push_back({"non-symmetric", c, 2, {"not symmetric", "C(3,0)"}});
+  cases.push_back({"non-square", gaussian(4, 6, 1), 2, {"4×6", "square"}});
+  cases.push_back({"n = 5, d = 2", random_psd(5, 2), 2, {"5×5", "divisible", "d = 2"}});
+  cases.push_back({"N = 1", random_psd(2, 3), 2, {"N = 1", "at least 2"}});
+  cases.push_back({"N = 0", Eigen::MatrixXd(0, 0), 2, {"N = 0"}});
+  cases.push_back({"d = 3", random_psd(6, 4), 3, {"d = 3"}});
+  cases.push_back({"d = 0", random_psd(6, 4), 0, {"d = 0"}});
+  return cases;
+}
+
+TEST(SdpInvalidInput, EveryBadInputIsRejectedWithAReason) {
+  for (const BadInput& b : bad_inputs()) {
+    SCOPED_TRACE(b.label);
+    const std::string why = fact::sdp::validate(b.C, b.d);
+    EXPECT_FALSE(why.empty());
+    const Result r = fact::sdp::solve(b.C, b.d);
+    EXPECT_EQ(r.status, Status::invalid_input);
+    EXPECT_FALSE(r.certified());
+    for (const std::string& s : b.reason_contains) {
+      EXPECT_NE(why.find(s), std::string::npos) << "validate: '" << why << "' lacks '" << s << "'";
+      EXPECT_NE(r.reason.find(s), std::string::npos) << "solve: '" << r.reason << "' lacks '" << s << "'";
+    }
+  }
+}
+
+TEST(SdpInvalidInput, GoodInputValidates) {
+  EXPECT_EQ(fact::sdp::validate(random_psd(4, 1), 2), "");
+  EXPECT_EQ(fact::sdp::validate(random_psd(4, 1), 1), "");
+  EXPECT_EQ(fact::sdp::validate(random_symmetric(6, 2), 2), "");
+  EXPECT_EQ(fact::sdp::validate(Eigen::MatrixXd::Zero(8, 8), 2), "");
+  // Asymmetry at rounding level is accepted (tolerance 1e-9 relative to the largest entry).
+  Eigen::MatrixXd c = random_psd(4, 1);
+  c(0, 1) += 1e-14;
+  EXPECT_EQ(fact::sdp::validate(c, 2), "");
+}
+
+// ---------------------------------------------------------------------------------------
+// Rounding errors.
+
+TEST(SdpRounding, BadReferenceThrows) {
+  const Result r = fact::sdp::solve(random_psd(6, 7), 2);
+  ASSERT_TRUE(r.certified()) << r.reason;
+  EXPECT_NO_THROW(fact::sdp::round_rotations(r, 2));
+  EXPECT_THROW(fact::sdp::round_rotations(r, -1), std::invalid_argument);
+  EXPECT_THROW(fact::sdp::round_rotations(r, 3), std::invalid_argument);
+}
+
+TEST(SdpRounding, D1ResultThrows) {
+  const Result r = fact::sdp::solve(random_psd(4, 7), 1);
+  ASSERT_TRUE(r.certified()) << r.reason;
+  EXPECT_THROW(fact::sdp::round_rotations(r, 0), std::invalid_argument);
+}
+
+TEST(SdpRounding, InvalidResultThrows) {
+  const Result r = fact::sdp::solve(random_psd(5, 7), 2);
+  ASSERT_EQ(r.status, Status::invalid_input);
+  EXPECT_THROW(fact::sdp::round_rotations(r, 0), std::invalid_argument);
+}
+
+TEST(SdpRounding, RotationAnglesAreInMinusPiToPi) {
+  std::vector<Eigen::Matrix2d> rots;
+  for (double a : {0.0, 1.0, -1.0, M_PI, -M_PI, 3.0, -3.0})
+    rots.push_back(Eigen::Rotation2Dd(a).toRotationMatrix());
+  const std::vector<double> angles = fact::sdp::rotation_angles(rots);
+  const std::vector<double> expected = {0.0, 1.0, -1.0, M_PI, M_PI, 3.0, -3.0};
+  ASSERT_EQ(angles.size(), expected.size());
+  for (std::size_t i = 0; i < angles.size(); ++i) {
+    EXPECT_NEAR(angles[i], expected[i], 1e-12) << i;
+    EXPECT_GT(angles[i], -M_PI);
+    EXPECT_LE(angles[i], M_PI);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Determinism and duality.
+
+Eigen::MatrixXd noisy_plain_cost(int drones, std::uint64_t seed) {
+  fact::SyntheticOptions o;
+  o.drones = drones;
+  o.rounds = drones + 2;
+  o.noise = 0.05;
+  o.seed = seed;
+  return fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+}
+
+TEST(SdpDeterminism, RepeatedSolvesAreBitIdentical) {
+  const std::vector<Eigen::MatrixXd> costs = {noisy_plain_cost(6, 4), fact::sdp::complex_form(noisy_plain_cost(5, 9)),
+                                              random_symmetric(10, 12)};
+  for (Method m : {Method::automatic, Method::low_rank, Method::interior_point}) {
+    for (std::size_t k = 0; k < costs.size(); ++k) {
+      SCOPED_TRACE(std::string(fact::sdp::to_string(m)) + " cost " + std::to_string(k));
+      Options o;
+      o.method = m;
+      const Result a = fact::sdp::solve(costs[k], 2, o);
+      const Result b = fact::sdp::solve(costs[k], 2, o);
+      EXPECT_EQ(a.status, b.status);
+      EXPECT_EQ(a.objective, b.objective);
+      EXPECT_EQ(a.dual_bound, b.dual_bound);
+      EXPECT_EQ(a.iterations, b.iterations);
+      ASSERT_EQ(a.Y.rows(), b.Y.rows());
+      ASSERT_EQ(a.Y.cols(), b.Y.cols());
+      EXPECT_TRUE((a.Y.array() == b.Y.array()).all());
+      EXPECT_TRUE((a.Lambda.array() == b.Lambda.array()).all());
+    }
+  }
+}
+
+TEST(SdpDuality, CertifiedResultsHaveConsistentBoundsForEveryMethod) {
+  struct Instance {
+    std::string label;
+    Eigen::MatrixXd C;
+    int d;
+  };
+  const std::vector<Instance> instances = {
+      {"plain noisy N=4", noisy_plain_cost(4, 1), 2},
+      {"plain noisy N=7", noisy_plain_cost(7, 2), 2},
+      {"complex noisy N=6", fact::sdp::complex_form(noisy_plain_cost(6, 3)), 2},
+      {"random symmetric n=12 d=2", random_symmetric(12, 31), 2},
+      {"random psd n=9 d=1", random_psd(9, 32), 1},
+      {"random symmetric n=10 d=1", random_symmetric(10, 33), 1},
+      {"scaled by 1e4", 1e4 * noisy_plain_cost(5, 4), 2},
+      {"scaled by 1e-4", 1e-4 * noisy_plain_cost(5, 4), 2},
+  };
+  for (const Instance& inst : instances) {
+    SCOPED_TRACE(inst.label);
+    const Result automatic = fact::sdp::solve(inst.C, inst.d);
+    expect_certificate(inst.C, inst.d, automatic);
+    for (Method m : {Method::low_rank, Method::interior_point}) {
+      SCOPED_TRACE(fact::sdp::to_string(m));
+      Options o;
+      o.method = m;
+      const Result r = fact::sdp::solve(inst.C, inst.d, o);
+      EXPECT_EQ(r.method_used, m);
+      if (!r.certified()) continue;  // a single method may legitimately fail to certify
+      expect_certificate(inst.C, inst.d, r);
+      // Each certified dual bound is a lower bound on the optimum, hence on the other
+      // method's objective; the objectives themselves agree to within the two gaps.
+      const double slack = 1e-12 * r.scale;
+      EXPECT_LE(automatic.dual_bound, r.objective + slack);
+      EXPECT_LE(r.dual_bound, automatic.objective + slack);
+    }
+  }
+}
+
+}  // namespace
