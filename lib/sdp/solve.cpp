@@ -58,23 +58,25 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o)
   return c;
 }
 
-// Interior point to a moderate gap, then Riemannian Newton at the rank it found. The interior
-// point finds the rank of a high-rank optimum reliably, but its last digits are limited by
-// the conditioning of Z⁻¹; Newton converges quadratically from there.
-Candidate from_interior_point_polished(const Eigen::MatrixXd& C, int d, Options o) {
-  o.gap_tol = std::max(o.gap_tol, 1e-7);
-  const detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o);
-  Candidate c;
-  c.Y = detail::factor_psd(ip.X, 1e-6);
-  for (Eigen::Index i = 0; i < c.Y.rows(); i += d) {
-    const Eigen::MatrixXd block = detail::polar_rows(c.Y.middleRows(i, d));
-    if (block.size() == 0 || c.Y.cols() < d) return from_interior_point(C, d, o);
-    c.Y.middleRows(i, d) = block;
+// Riemannian Newton from the interior point's X, at the rank it found (at most the Pataki
+// bound). The interior point finds the optimal face reliably, but when the optimum is small
+// against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
+// quadratically from there.
+Candidate polish(const Eigen::MatrixXd& C, int d, const Candidate& ip) {
+  const Eigen::MatrixXd X = ip.Y * ip.Y.transpose();
+  Eigen::MatrixXd Y = detail::factor_psd(X, 1e-6);
+  const int max_rank = detail::pataki_rank(static_cast<int>(C.rows() / d), d);
+  if (Y.cols() > max_rank) Y.conservativeResize(Eigen::NoChange, max_rank);
+  if (Y.cols() < d) return ip;
+  for (Eigen::Index i = 0; i < Y.rows(); i += d) {
+    const Eigen::MatrixXd block = detail::polar_rows(Y.middleRows(i, d));
+    if (block.size() == 0) return ip;
+    Y.middleRows(i, d) = block;
   }
-  c.iterations = ip.iterations + detail::newton_refine(C, d, c.Y, 60, 1e-12);
+  Candidate c = ip;
+  c.iterations += detail::newton_refine(C, d, Y, 60, 1e-12);
+  c.Y = std::move(Y);
   c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
-  c.method = Method::interior_point;
-  c.note = ip.reason;
   return c;
 }
 
@@ -129,9 +131,12 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   if (try_low_rank) best = from_low_rank(Cs, d, options);
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(Cs, best, d, options))) {
-    Candidate ip = options.method == Method::automatic ? from_interior_point_polished(Cs, d, options)
-                                                       : from_interior_point(Cs, d, options);
+    Candidate ip = from_interior_point(Cs, d, options);
     ip.iterations += best.iterations;
+    if (options.method == Method::automatic && !is_certified(Cs, ip, d, options)) {
+      Candidate polished = polish(Cs, d, ip);
+      if (is_certified(Cs, polished, d, options)) ip = std::move(polished);
+    }
     if (!try_low_rank || is_certified(Cs, ip, d, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
   }
 
