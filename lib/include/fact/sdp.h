@@ -39,7 +39,7 @@ struct Options {
   double gap_tol = 1e-9;     // largest relative duality gap that certifies (problem scaled to ‖C‖_F = 1)
   double psd_tol = 1e-9;     // λ_min(S) ≥ −psd_tol (scaled problem) counts as S ⪰ 0
   double null_tol = 1e-10;   // eigenvalues of scaled S below this count toward the nullity
-  int max_sweeps = 3000;     // block-coordinate sweeps per staircase level
+  int max_sweeps = 10;       // block-coordinate sweeps after each staircase escape, before Newton
   int max_ipm_iterations = 80;
   int max_rank = 0;          // largest factor rank for the staircase; 0 = Pataki bound
   unsigned seed = 1;         // deterministic initialisation
