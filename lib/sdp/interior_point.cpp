@@ -10,6 +10,7 @@
 // so Aᵀ(y) = blkdiag(Λ) with Λ entries equal to the y_p, and A(W)_p = W_uv (+ W_vu).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "internal.h"
@@ -178,12 +179,22 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   Eigen::MatrixXd Z = certificate_matrix(C, lambda, d);  // dual slack, n × n
   const double tau = 0.95;
 
+  double best_gap = std::numeric_limits<double>::infinity();
+  int stalled = 0;  // iterations since the gap last halved
   for (int it = 0; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
     const double gap = X.cwiseProduct(Z).sum();
-    if (gap / std::max({1e-4, std::abs(primal), std::abs(dual)}) < 0.1 * options.gap_tol) {
+    const double rel_gap = gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
+    if (rel_gap < 0.1 * options.gap_tol) {
       out.converged = true;
+      break;
+    }
+    if (gap < 0.5 * best_gap) {
+      best_gap = gap;
+      stalled = 0;
+    } else if (++stalled >= 4) {  // rounding now limits the last digits
+      out.reason = "interior point stalled at relative gap " + std::to_string(rel_gap);
       break;
     }
     const double mu = gap / n;

@@ -8,6 +8,7 @@
 //   T_i = { Ω Y_i + A N_iᵀ : Ω skew d×d, A d×(r−d) },  N_i r×(r−d) with Y_i N_i = 0,
 // which has t = d·r − d(d+1)/2 directions. The Newton system (H + μI) η = −g is N·t square.
 #include <cmath>
+#include <limits>
 
 #include "internal.h"
 
@@ -46,6 +47,7 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
   if (t == 0) return 0;
   double mu = 1e-8;  // Levenberg–Marquardt damping on the Newton system
   double f = cost(C, Y);
+  const double noise = 100.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * C.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
     const Eigen::MatrixXd S = certificate_matrix(C, lambda_from_factor(C, Y, d), d);  // n × n
@@ -77,7 +79,7 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
         next.middleRows(i * d, d) = polar_rows(Y.middleRows(i * d, d) + step);
       }
       const double f_next = cost(C, next);
-      if (f_next <= f + 1e-15 * std::abs(f)) {
+      if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
         Y = next;
         f = f_next;
         stepped = true;
