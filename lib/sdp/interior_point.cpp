@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 #include "internal.h"
@@ -194,7 +195,9 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
       best_gap = gap;
       stalled = 0;
     } else if (++stalled >= 4) {  // rounding now limits the last digits
-      out.reason = "interior point stalled at relative gap " + std::to_string(rel_gap);
+      std::ostringstream why;
+      why << "interior point stalled at relative gap " << rel_gap << " after " << it + 1 << " iterations";
+      out.reason = why.str();
       break;
     }
     const double mu = gap / n;

@@ -11,6 +11,10 @@ namespace {
 
 using detail::Certificate;
 
+// Largest Newton system the polish may factor (its cost is size³/3): beyond it the
+// interior point's own result stands.
+constexpr int kMaxPolishSize = 2000;
+
 struct Candidate {
   Eigen::MatrixXd Y;      // n × r factor of X
   Certificate cert;       // certificate for it (scaled problem)
@@ -59,15 +63,20 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o)
 }
 
 // Riemannian Newton from the interior point's X, at the rank it found (at most the Pataki
-// bound). The interior point finds the optimal face reliably, but when the optimum is small
+// bound), when the Newton system is small enough. The interior point finds the optimal face reliably, but when the optimum is small
 // against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
 // quadratically from there.
 Candidate polish(const Eigen::MatrixXd& C, int d, const Candidate& ip) {
-  const Eigen::MatrixXd X = ip.Y * ip.Y.transpose();
-  Eigen::MatrixXd Y = detail::factor_psd(X, 1e-6);
+  // ip.Y's columns are X's eigenvectors scaled by √eigenvalue, largest first: keep those
+  // with eigenvalue above 1e-6 of the largest, at most the Pataki bound.
+  const Eigen::VectorXd eigenvalues = ip.Y.colwise().squaredNorm().transpose();
   const int max_rank = detail::pataki_rank(static_cast<int>(C.rows() / d), d);
-  if (Y.cols() > max_rank) Y.conservativeResize(Eigen::NoChange, max_rank);
-  if (Y.cols() < d) return ip;
+  int rank = 0;
+  while (rank < eigenvalues.size() && rank < max_rank && eigenvalues[rank] > 1e-6 * eigenvalues.maxCoeff()) ++rank;
+  const int blocks = static_cast<int>(C.rows() / d);
+  const int newton_size = blocks * (d * rank - d * (d + 1) / 2);  // unknowns of the Newton system
+  if (rank < d || newton_size > kMaxPolishSize) return ip;
+  Eigen::MatrixXd Y = ip.Y.leftCols(rank);
   for (Eigen::Index i = 0; i < Y.rows(); i += d) {
     const Eigen::MatrixXd block = detail::polar_rows(Y.middleRows(i, d));
     if (block.size() == 0) return ip;
