@@ -79,16 +79,17 @@ static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::Vect
 }
 
 // The d eigenvectors of C's smallest eigenvalues (n × d), by subspace inverse iteration on
-// C + δI (one Cholesky factorisation, then O(n²) per step). C is PSD in every use here; for an
-// indefinite C, or when the factorisation fails, a full eigen-decomposition is used instead.
+// C + δI (one Cholesky factorisation, then O(n²) per step). For n ≤ 64, or when C + δI is not
+// positive definite (C indefinite), a full eigen-decomposition is used instead.
 static Eigen::MatrixXd bottom_eigenvectors(const Eigen::MatrixXd& C, int d) {
   const Eigen::Index n = C.rows();
+  const auto full_decomposition = [&] {
+    return Eigen::MatrixXd(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(C).eigenvectors().leftCols(d));
+  };
+  if (n <= 64) return full_decomposition();  // small: the full decomposition is as cheap
   const double shift = 1e-10 * std::max(1.0, C.diagonal().cwiseAbs().maxCoeff());
-  Eigen::LLT<Eigen::MatrixXd> chol(C + shift * Eigen::MatrixXd::Identity(n, n));
-  if (n <= 64 || chol.info() != Eigen::Success) {
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
-    return eig.eigenvectors().leftCols(d);
-  }
+  const Eigen::LLT<Eigen::MatrixXd> chol(C + shift * Eigen::MatrixXd::Identity(n, n));
+  if (chol.info() != Eigen::Success) return full_decomposition();
   Eigen::MatrixXd V(n, d + 2);  // two guard vectors speed up convergence of the first d
   for (Eigen::Index i = 0; i < n; ++i)
     for (Eigen::Index k = 0; k < V.cols(); ++k) V(i, k) = std::sin(1.0 + i * (k + 1.618) + 0.37 * k);
