@@ -120,7 +120,7 @@ LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& op
   out.Y = spectral_factor(C, d, options.seed);
   for (;;) {
     if (out.Y.cols() > d) out.iterations += block_coordinate_sweeps(C, d, out.Y, options.max_sweeps, 1e-3);
-    out.iterations += newton_refine(C, d, out.Y, 60, 1e-12);
+    out.iterations += newton_refine(C, d, out.Y, options.max_newton_iterations, 1e-12);
     const Eigen::MatrixXd lambda = lambda_from_factor(C, out.Y, d);
     out.certificate = certify(C, lambda, d, false);
     out.certified = out.certificate.min_eig >= -options.psd_tol;

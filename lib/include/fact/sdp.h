@@ -41,6 +41,7 @@ struct Options {
   double null_tol = 1e-10;   // eigenvalues of scaled S below this count toward the nullity
   int max_sweeps = 10;       // block-coordinate sweeps after each staircase escape, before Newton
   int max_ipm_iterations = 80;
+  int max_newton_iterations = 60;  // Riemannian Newton steps per staircase level (automatic mode: 25 at rank d)
   int max_rank = 0;          // largest factor rank for the staircase; 0 = Pataki bound
   unsigned seed = 1;         // deterministic initialisation
 };
