@@ -18,6 +18,7 @@ constexpr int kMaxPolishSize = 2000;
 struct Candidate {
   Eigen::MatrixXd Y;      // n × r factor of X
   Certificate cert;       // certificate for it (scaled problem)
+  double primal = 0;      // ⟨C, Y Yᵀ⟩ (scaled), from primal_objective, set with cert
   int iterations = 0;
   Method method = Method::low_rank;
   std::string note;       // why the method stopped, when it did not converge
@@ -37,9 +38,8 @@ double primal_objective(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, cons
   return cert.trace_lambda + Y.cwiseProduct(SY).sum();
 }
 
-bool is_certified(const Eigen::MatrixXd& C, const Candidate& c, int d, const Options& o) {
-  return c.cert.min_eig >= -o.psd_tol &&
-         relative_gap(primal_objective(C, c.Y, c.cert, d), c.cert.dual_bound) <= o.gap_tol;
+bool is_certified(const Candidate& c, const Options& o) {
+  return c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol;
 }
 
 // In automatic mode the low-rank path only tries rank d (the tight case, where Newton has
@@ -52,7 +52,9 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
     o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
   }
   detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o);
-  return {std::move(lr.Y), std::move(lr.certificate), lr.iterations, Method::low_rank, {}};
+  Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
+  c.primal = primal_objective(C, c.Y, c.cert, d);
+  return c;
 }
 
 Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o) {
@@ -60,6 +62,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o)
   Candidate c;
   c.Y = detail::factor_psd(ip.X, 0.0);
   c.cert = detail::certify(C, ip.lambda, d, false);
+  c.primal = primal_objective(C, c.Y, c.cert, d);
   c.iterations = ip.iterations;
   c.method = Method::interior_point;
   c.note = ip.reason;
@@ -67,17 +70,17 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o)
 }
 
 // Riemannian Newton from the interior point's X, at the rank it found (at most the Pataki
-// bound), when the Newton system is small enough. The interior point finds the optimal face reliably, but when the optimum is small
-// against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
-// quadratically from there.
+// bound), when the Newton system is small enough. The interior point finds the optimal face
+// reliably, but when the optimum is small against ‖C‖ its last digits are limited by the
+// conditioning of Z⁻¹; Newton converges quadratically from there.
 Candidate polish(const Eigen::MatrixXd& C, int d, const Candidate& ip) {
   // ip.Y's columns are X's eigenvectors scaled by √eigenvalue, largest first: keep those
   // with eigenvalue above 1e-6 of the largest, at most the Pataki bound.
   const Eigen::VectorXd eigenvalues = ip.Y.colwise().squaredNorm().transpose();
-  const int max_rank = detail::pataki_rank(static_cast<int>(C.rows() / d), d);
+  const int blocks = static_cast<int>(C.rows() / d);
+  const int max_rank = detail::pataki_rank(blocks, d);
   int rank = 0;
   while (rank < eigenvalues.size() && rank < max_rank && eigenvalues[rank] > 1e-6 * eigenvalues.maxCoeff()) ++rank;
-  const int blocks = static_cast<int>(C.rows() / d);
   const int newton_size = blocks * (d * rank - d * (d + 1) / 2);  // unknowns of the Newton system
   if (rank < d || newton_size > kMaxPolishSize) return ip;
   Eigen::MatrixXd Y = ip.Y.leftCols(rank);
@@ -90,6 +93,7 @@ Candidate polish(const Eigen::MatrixXd& C, int d, const Candidate& ip) {
   c.iterations += detail::newton_refine(C, d, Y, 60, 1e-12);
   c.Y = std::move(Y);
   c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
+  c.primal = primal_objective(C, c.Y, c.cert, d);
   return c;
 }
 
@@ -143,17 +147,17 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   const bool try_low_rank = options.method != Method::interior_point;
   if (try_low_rank) best = from_low_rank(Cs, d, options);
   if (options.method == Method::interior_point ||
-      (options.method == Method::automatic && !is_certified(Cs, best, d, options))) {
+      (options.method == Method::automatic && !is_certified(best, options))) {
     Candidate ip = from_interior_point(Cs, d, options);
     ip.iterations += best.iterations;
-    if (options.method == Method::automatic && !is_certified(Cs, ip, d, options)) {
+    if (options.method == Method::automatic && !is_certified(ip, options)) {
       Candidate polished = polish(Cs, d, ip);
-      if (is_certified(Cs, polished, d, options)) ip = std::move(polished);
+      if (is_certified(polished, options)) ip = std::move(polished);
     }
-    if (!try_low_rank || is_certified(Cs, ip, d, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
+    if (!try_low_rank || is_certified(ip, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
   }
 
-  const double primal = primal_objective(Cs, best.Y, best.cert, d);
+  const double primal = best.primal;
   r.method_used = best.method;
   r.Y = best.Y;
   r.Lambda = best.cert.lambda * r.scale;
