@@ -33,6 +33,10 @@ int block_coordinate_sweeps(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y,
 // Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol. Returns the steps taken.
 int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol);
 
+// Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
+// leaving the rest untouched, at the first block with no direction (all zero).
+bool project_blocks(Eigen::MatrixXd& Y, int d);
+
 // The nearest matrix with orthonormal rows to G (d × r, d ≤ r): (G Gᵀ)^{-1/2} G.
 Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G);
 

@@ -29,6 +29,15 @@ Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
   return root.inverse() * G;
 }
 
+bool project_blocks(Eigen::MatrixXd& Y, int d) {
+  for (Eigen::Index i = 0; i < Y.rows(); i += d) {
+    const Eigen::MatrixXd block = polar_rows(Y.middleRows(i, d));
+    if (block.size() == 0) return false;
+    Y.middleRows(i, d) = block;
+  }
+  return true;
+}
+
 // One block update at fixed size D (1 or 2): hot path, fixed-size types.
 template <int D>
 static int sweeps_fixed(const Eigen::MatrixXd& C, Eigen::MatrixXd& Y, int max_sweeps, double tol) {
@@ -74,7 +83,7 @@ static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::Vect
   Eigen::MatrixXd next(Y.rows(), Y.cols() + 1);
   next.leftCols(Y.cols()) = Y;
   next.col(Y.cols()) = step * v;
-  for (Eigen::Index i = 0; i < Y.rows(); i += d) next.middleRows(i, d) = polar_rows(next.middleRows(i, d));
+  project_blocks(next, d);  // every block keeps its orthonormal Y_i part, so none is zero
   return next;
 }
 

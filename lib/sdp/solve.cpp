@@ -84,11 +84,7 @@ Candidate polish(const Eigen::MatrixXd& C, int d, const Candidate& ip) {
   const int newton_size = blocks * (d * rank - d * (d + 1) / 2);  // unknowns of the Newton system
   if (rank < d || newton_size > kMaxPolishSize) return ip;
   Eigen::MatrixXd Y = ip.Y.leftCols(rank);
-  for (Eigen::Index i = 0; i < Y.rows(); i += d) {
-    const Eigen::MatrixXd block = detail::polar_rows(Y.middleRows(i, d));
-    if (block.size() == 0) return ip;
-    Y.middleRows(i, d) = block;
-  }
+  if (!detail::project_blocks(Y, d)) return ip;
   Candidate c = ip;
   c.iterations += detail::newton_refine(C, d, Y, 60, 1e-12);
   c.Y = std::move(Y);
