@@ -5,6 +5,8 @@ packages=(
   build-essential cmake pkg-config          # toolchain
   libeigen3-dev                             # linear algebra (lib/)
   libgtest-dev googletest                   # tests
+  nlohmann-json3-dev libcli11-dev           # JSON files, command lines
+  gnuplot-nox                               # benchmark plots (PNG)
   libsdpa-dev libsdp-dev coinor-csdp        # SDP peers, benchmark only (never linked into lib/ or apps/)
 )
 missing=()

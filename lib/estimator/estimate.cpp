@@ -1,0 +1,227 @@
+// estimate_poses: input checks, the problem's indexed form, and the choice of mode.
+#include "internal.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace fact {
+
+const char* to_string(Mode m) {
+  switch (m) {
+    case Mode::paper: return "paper";
+    case Mode::complex: return "complex";
+    case Mode::associated: return "associated";
+    case Mode::automatic: return "auto";
+  }
+  return "?";
+}
+
+bool parse_mode(const std::string& text, Mode* mode) {
+  for (Mode m : {Mode::paper, Mode::complex, Mode::associated, Mode::automatic})
+    if (text == to_string(m)) {
+      *mode = m;
+      return true;
+    }
+  return false;
+}
+
+const char* to_string(EstimateStatus s) {
+  switch (s) {
+    case EstimateStatus::certified: return "certified";
+    case EstimateStatus::ambiguous: return "ambiguous";
+    case EstimateStatus::invalid_input: return "invalid_input";
+  }
+  return "?";
+}
+
+double NoiseModel::sigma(double range) const {
+  const double along = linear * range + quadratic * range * range;
+  const double across = bearing * range;
+  return std::sqrt(floor * floor + along * along + across * across);
+}
+
+namespace estimator {
+
+Eigen::Matrix3d yaw_rotation(double yaw) {
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  Eigen::Matrix3d R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  return R;
+}
+
+double wrap_angle(double a) {
+  a = std::remainder(a, 2 * M_PI);  // [−π, π]
+  return a <= -M_PI ? a + 2 * M_PI : a;
+}
+
+// Covariance (m², f_i axes) of a detected centre at `direction` (m, f_i axes): range noise along
+// the ray, bearing noise across it, a centring floor, and the odometry's position and yaw error.
+Eigen::Matrix3d detection_covariance(const NoiseModel& n, const Eigen::Vector3d& direction) {
+  const double d = direction.norm();
+  const Eigen::Vector3d u = direction / d;
+  const double range_sd = n.linear * d + n.quadratic * d * d;
+  const double along = n.floor * n.floor + range_sd * range_sd + n.odometry * n.odometry;
+  const double across = n.floor * n.floor + std::pow(n.bearing * d, 2) + n.odometry * n.odometry +
+                        std::pow(n.odometry_yaw * d, 2);
+  const Eigen::Matrix3d ray = u * u.transpose();
+  return along * ray + across * (Eigen::Matrix3d::Identity() - ray);
+}
+
+Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel& noise) {
+  Problem p;
+  p.ids = rounds.drones;
+  std::sort(p.ids.begin(), p.ids.end());
+  p.reference = reference_index;
+  p.noise = noise;
+  for (const Round& round : rounds.rounds) {
+    std::vector<DroneView> views(p.ids.size());
+    for (const auto& [id, drone] : round.drones) {
+      const int i = static_cast<int>(std::lower_bound(p.ids.begin(), p.ids.end(), id) - p.ids.begin());
+      DroneView& v = views[i];
+      v.present = true;
+      v.position = drone.position;
+      for (const Observation& obs : drone.observations) {
+        Detection d;
+        d.observer = obs.odom_position;
+        d.body = obs.vector;
+        d.direction = yaw_rotation(obs.odom_yaw) * obs.vector;
+        d.target = d.observer + d.direction;
+        d.range = obs.vector.norm();
+        d.cov = detection_covariance(noise, d.direction);
+        d.sigma = std::sqrt(d.cov.eigenvalues().real().maxCoeff());
+        v.detections.push_back(d);
+      }
+    }
+    p.views.push_back(std::move(views));
+  }
+  return p;
+}
+
+Certificate certificate_of(const sdp::Result& r) {
+  Certificate c;
+  c.objective = r.objective;
+  c.dual_objective = r.dual_bound;
+  c.gap = r.rel_gap;
+  c.min_eig = r.min_eig_S;
+  c.rank = r.rank;
+  return c;
+}
+
+std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma) {
+  for (size_t i = 0; i < sigma.size(); ++i) {
+    if (sigma[i].yaw > p.max_yaw_sigma || sigma[i].position > p.max_position_sigma) {
+      std::ostringstream s;
+      s << "drone " << p.ids[i] << " is too uncertain to certify: yaw sigma " << sigma[i].yaw << " rad (limit "
+        << p.max_yaw_sigma << "), position sigma " << sigma[i].position << " m (limit " << p.max_position_sigma << ")";
+      return s.str();
+    }
+  }
+  return "";
+}
+
+std::vector<double> yaws_from_sdp(const sdp::Result& r, int reference) {
+  return sdp::rotation_angles(sdp::round_rotations(r, reference));
+}
+
+}  // namespace estimator
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+Estimate invalid(const Rounds& rounds, const std::string& reason) {
+  Estimate e;
+  e.status = EstimateStatus::invalid_input;
+  e.reason = reason;
+  for (int id : rounds.drones) e.drones.push_back(DronePose{id, 0.0, Eigen::Vector3d::Zero(), false});
+  for (int id : rounds.drones) e.unresolved.push_back(id);
+  const double nan = std::nan("");
+  e.certificate = Certificate{nan, nan, nan, nan, 0};
+  return e;
+}
+
+std::string check_noise(const NoiseModel& n) {
+  const std::pair<const char*, double> fields[] = {
+      {"floor", n.floor},       {"linear", n.linear},         {"quadratic", n.quadratic}, {"bearing", n.bearing},
+      {"odometry", n.odometry}, {"odometry_yaw", n.odometry_yaw}, {"gate", n.gate}};
+  for (const auto& [name, v] : fields) {
+    if (!std::isfinite(v) || v < 0) {
+      std::ostringstream s;
+      s << "noise." << name << " is " << v << " (must be finite and >= 0)";
+      return s.str();
+    }
+  }
+  if (n.sigma(1.0) <= 0) return "noise: every term is 0, so no residual could be judged";
+  if (n.gate <= 0) return "noise.gate is 0 (must be > 0)";
+  return "";
+}
+
+Estimate run_mode(Mode mode, const estimator::Problem& p, const sdp::Options& o) {
+  switch (mode) {
+    case Mode::paper: return estimator::estimate_summed(p, false, o);
+    case Mode::complex: return estimator::estimate_summed(p, true, o);
+    default: return estimator::estimate_associated(p, o);
+  }
+}
+
+// auto: the most capable mode that certifies; if none does, the associated result.
+Estimate run_automatic(const estimator::Problem& p, const sdp::Options& o) {
+  std::vector<Estimate> tried;
+  for (Mode m : {Mode::associated, Mode::complex, Mode::paper}) {
+    tried.push_back(run_mode(m, p, o));
+    if (tried.back().certified()) break;
+  }
+  Estimate out = tried.back().certified() ? tried.back() : tried.front();
+  if (!out.certified()) {
+    for (size_t t = 1; t < tried.size(); ++t)
+      out.reason += "; " + std::string(to_string(tried[t].mode)) + ": " + tried[t].reason;
+  }
+  std::vector<std::pair<std::string, double>> timing;
+  for (const Estimate& e : tried)
+    for (const auto& [stage, us] : e.timing_us) timing.emplace_back(std::string(to_string(e.mode)) + "." + stage, us);
+  out.timing_us = timing;
+  return out;
+}
+
+}  // namespace
+
+Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options) {
+  const auto start = Clock::now();
+  if (std::string e = validate_rounds(rounds); !e.empty()) return invalid(rounds, e);
+  if (options.max_rounds < 0)
+    return invalid(rounds, "max_rounds is " + std::to_string(options.max_rounds) + " (must be >= 0)");
+  if (std::string e = check_noise(options.noise); !e.empty()) return invalid(rounds, e);
+  if (!(options.max_yaw_sigma > 0) || !std::isfinite(options.max_yaw_sigma))
+    return invalid(rounds, "max_yaw_sigma is " + std::to_string(options.max_yaw_sigma) + " (must be finite and > 0)");
+  if (!(options.max_position_sigma > 0) || !std::isfinite(options.max_position_sigma))
+    return invalid(rounds,
+                   "max_position_sigma is " + std::to_string(options.max_position_sigma) + " (must be finite and > 0)");
+  if (!std::isfinite(options.min_separation) || options.min_separation < 0)
+    return invalid(rounds, "min_separation is " + std::to_string(options.min_separation) + " (must be finite and >= 0)");
+  const Rounds used = first_rounds(rounds, options.max_rounds);
+  std::vector<int> ids = rounds.drones;
+  std::sort(ids.begin(), ids.end());
+  const int reference_id = options.reference < 0 ? ids.front() : options.reference;
+  const auto ref = std::find(ids.begin(), ids.end(), reference_id);
+  if (ref == ids.end())
+    return invalid(rounds, "reference: drone " + std::to_string(reference_id) + " is not in the swarm");
+  estimator::Problem problem = estimator::make_problem(used, static_cast<int>(ref - ids.begin()), options.noise);
+  problem.min_separation = options.min_separation;
+  problem.max_yaw_sigma = options.max_yaw_sigma;
+  problem.max_position_sigma = options.max_position_sigma;
+  Estimate out = options.mode == Mode::automatic ? run_automatic(problem, options.sdp)
+                                                 : run_mode(options.mode, problem, options.sdp);
+  out.reference = reference_id;
+  out.rounds_used = problem.rounds();
+  out.unresolved.clear();
+  for (const DronePose& d : out.drones)
+    if (!d.resolved) out.unresolved.push_back(d.id);
+  out.timing_us.emplace_back("total",
+                             std::chrono::duration<double, std::micro>(Clock::now() - start).count());
+  return out;
+}
+
+}  // namespace fact

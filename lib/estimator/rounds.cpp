@@ -1,0 +1,75 @@
+// Checks on observation rounds, and selecting the first K of them.
+#include "fact/rounds.h"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+namespace fact {
+namespace {
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+// "" if every component is finite, else "<field>[c] is <value>".
+std::string check_vector(const Eigen::Vector3d& v, const std::string& field) {
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(v[c])) return field + "[" + std::to_string(c) + "] is " + number(v[c]);
+  return "";
+}
+
+std::string check_scalar(double v, const std::string& field) {
+  return std::isfinite(v) ? "" : field + " is " + number(v);
+}
+
+std::string check_drone(const DroneRound& d) {
+  std::string e = check_vector(d.position, "position");
+  if (e.empty()) e = check_scalar(d.yaw, "yaw");
+  for (size_t o = 0; e.empty() && o < d.observations.size(); ++o) {
+    const Observation& obs = d.observations[o];
+    const std::string at = "observations[" + std::to_string(o) + "].";
+    e = check_vector(obs.odom_position, at + "odom_position");
+    if (e.empty()) e = check_scalar(obs.odom_yaw, at + "odom_yaw");
+    if (e.empty()) e = check_vector(obs.vector, at + "vector");
+    if (e.empty() && obs.vector.norm() < 1e-6)
+      e = at + "vector has length " + number(obs.vector.norm()) + " m (a detection must point somewhere)";
+  }
+  return e;
+}
+
+}  // namespace
+
+std::string validate_rounds(const Rounds& rounds) {
+  std::set<int> ids;
+  for (size_t i = 0; i < rounds.drones.size(); ++i) {
+    if (!ids.insert(rounds.drones[i]).second)
+      return "drones[" + std::to_string(i) + "]: id " + std::to_string(rounds.drones[i]) + " is listed twice";
+  }
+  if (ids.size() < 2) return "drones: " + std::to_string(ids.size()) + " drone(s) listed, at least 2 are needed";
+  if (rounds.rounds.empty()) return "rounds: no rounds";
+  for (size_t k = 0; k < rounds.rounds.size(); ++k) {
+    const Round& round = rounds.rounds[k];
+    const std::string at = "round " + std::to_string(k) + " (index " + std::to_string(round.index) + "): ";
+    for (const auto& [id, drone] : round.drones) {
+      if (!ids.count(id)) return at + "drone " + std::to_string(id) + " is not in the swarm's drone list";
+      const std::string e = check_drone(drone);
+      if (!e.empty()) return at + "drone " + std::to_string(id) + ": " + e;
+    }
+  }
+  return "";
+}
+
+Rounds first_rounds(const Rounds& rounds, int count) {
+  Rounds out;
+  out.drones = rounds.drones;
+  const size_t n = (count <= 0 || static_cast<size_t>(count) > rounds.rounds.size()) ? rounds.rounds.size()
+                                                                                    : static_cast<size_t>(count);
+  out.rounds.assign(rounds.rounds.begin(), rounds.rounds.begin() + n);
+  return out;
+}
+
+}  // namespace fact

@@ -1,0 +1,97 @@
+// The swarm pose estimator: observation rounds in, the relative poses of every drone's odometry
+// frame out, with an honest statement of certainty. Plain functions over plain data; no I/O.
+//
+// Modes (see ../shared/docs/mission.md):
+//   paper       the paper's summed anonymous cost, its real 2N×2N SDP (d = 2), rounding, Hungarian
+//               matching of detections in the common frame, translations over the observation graph.
+//   complex     the same summed data in the tight U(1) form Q̃ = Q + KᵀQK (exact with N−1 rounds).
+//   associated  yaw-invariant association of mutual pairs (|v_ij| ≈ |v_ji|, v_ij,z ≈ −v_ji,z),
+//               each pair a relative-pose hypothesis verified against the detections both drones
+//               share, then certified rotation synchronisation and least-squares translation.
+//   automatic   associated, then complex, then paper: the first that certifies.
+#pragma once
+
+#include "fact/rounds.h"
+#include "fact/sdp.h"
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace fact {
+
+enum class Mode { paper, complex, associated, automatic };
+const char* to_string(Mode m);         // "paper", "complex", "associated", "auto"
+bool parse_mode(const std::string& text, Mode* mode);  // accepts the names above
+
+enum class EstimateStatus {
+  certified,      // globally optimal, unique, every drone resolved and consistent
+  ambiguous,      // too few rounds, disconnected graph, symmetric formation, … (reason says which)
+  invalid_input,  // reason names the round, the drone, the field and the value
+};
+const char* to_string(EstimateStatus s);  // "certified", "ambiguous", "invalid_input"
+
+// The sensor's noise, as a standard deviation of a detected centre's position in metres at
+// range d: σ(d) = sqrt(floor² + (linear·d + quadratic·d²)² + (bearing·d)²). It is a calibration
+// of the camera, not knowledge of the scene. Defaults: a D430-class depth camera.
+struct NoiseModel {
+  double floor = 0.03;        // m, detector centring error at any range
+  double linear = 0.0;        // range σ per metre of range (the paper's model: 0.05 per axis)
+  double quadratic = 0.008;   // range σ per metre² (stereo depth: c·d²)
+  double bearing = 0.005;     // rad, bearing σ
+  double odometry = 0.02;     // m, VIO position error within a session of rounds
+  double odometry_yaw = 0.01; // rad, VIO yaw error within a session of rounds
+  double gate = 4.0;          // a residual within gate·σ counts as consistent
+  double sigma(double range) const;
+};
+
+struct EstimateOptions {
+  Mode mode = Mode::automatic;
+  int max_rounds = 0;   // use only the first K rounds (0 = all)
+  int reference = -1;   // id of the reference drone (−1 = lowest id)
+  NoiseModel noise;
+  // Two drones are never closer than this (m, centre to centre). A pose that would put two drones
+  // in one place contradicts itself; this is how a wrong association is caught.
+  double min_separation = 0.3;
+  // A result is certified only when every pose is this precise (1 σ, from the information of the
+  // matched detections): a globally optimal answer to noisy data can still be too uncertain to use.
+  double max_yaw_sigma = 0.025;     // rad
+  double max_position_sigma = 0.08; // m
+  sdp::Options sdp;
+};
+
+struct DronePose {
+  int id = 0;
+  double yaw = 0;                                      // yaw of f_i in f_ref, (−π, π]
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // origin of f_i in f_ref (m)
+  bool resolved = false;                               // pose determined and consistent
+};
+
+// The rotation SDP's certificate, unscaled.
+struct Certificate {
+  double objective = 0;       // primal optimum ⟨C, X⟩ (paper mode: the paper's SDP)
+  double dual_objective = 0;  // rigorous dual bound
+  double gap = 0;             // relative duality gap
+  double min_eig = 0;         // λ_min of the dual slack S (scaled problem)
+  int rank = 0;               // numerical rank of X
+};
+
+struct Estimate {
+  Mode mode = Mode::automatic;   // the mode that produced this result (never automatic)
+  EstimateStatus status = EstimateStatus::invalid_input;
+  std::string reason;
+  int reference = -1;
+  int rounds_used = 0;
+  std::vector<DronePose> drones;  // one per id in Rounds::drones, same order
+  std::vector<int> unresolved;    // ids with resolved == false
+  Certificate certificate;
+  std::vector<std::pair<std::string, double>> timing_us;  // named stages, then "total"
+  bool certified() const { return status == EstimateStatus::certified; }
+};
+
+// Estimates the pose of every drone's odometry frame in the reference drone's frame.
+// Never throws on bad input: returns EstimateStatus::invalid_input with the reason.
+Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options = {});
+
+}  // namespace fact

@@ -1,0 +1,51 @@
+// Observation rounds: the estimator's input, as plain data.
+//
+// Frames (see ../shared/docs/design.md): drone i's odometry frame f_i is where its VIO started,
+// gravity-aligned with an arbitrary yaw. Units are metres and radians; axes are FLU.
+// The same content travels as the fact-rounds-v1 JSON format and, later, as LCM messages.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fact {
+
+// One anonymous detection made by a drone.
+struct Observation {
+  Eigen::Vector3d odom_position = Eigen::Vector3d::Zero();  // observer position in f_i at detection (m)
+  double odom_yaw = 0;                                       // observer yaw in f_i at detection (rad)
+  // From the observer's centre to the detected drone's centre, in the observer's
+  // gravity-aligned body frame at detection time (x along its heading, z up), metres.
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+};
+
+// What one drone reports for one round.
+struct DroneRound {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // odometry position in f_i at the round's start (m)
+  double yaw = 0;                                      // odometry yaw in f_i at the round's start (rad)
+  std::vector<Observation> observations;               // may be empty
+};
+
+// One round: every drone that reported, by id.
+struct Round {
+  int index = 0;
+  std::map<int, DroneRound> drones;
+};
+
+// A whole session of rounds for a swarm.
+struct Rounds {
+  std::vector<int> drones;    // the swarm's ids, ascending and unique
+  std::vector<Round> rounds;  // in order
+};
+
+// Checks the data a decoder produced: ids unique and known, every number finite, at least two
+// drones. Returns "" when usable, otherwise one line naming the round, the drone, the field and
+// the value, e.g. "round 2 (index 2): drone 5: observations[1].vector[0] is nan".
+std::string validate_rounds(const Rounds& rounds);
+
+// The first `count` rounds (all of them when count <= 0 or count exceeds the number).
+Rounds first_rounds(const Rounds& rounds, int count);
+
+}  // namespace fact

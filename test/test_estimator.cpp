@@ -1,0 +1,276 @@
+// The estimator on generated scenarios: exact recovery, noise bounds, ambiguity, bad input.
+#include "fact/estimator.h"
+#include "fact/simgen.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace fact {
+namespace {
+
+struct Errors {
+  double yaw = 0;       // largest |yaw error| over resolved drones (rad)
+  double position = 0;  // largest position error over resolved drones (m)
+  int resolved = 0;
+};
+
+Errors errors_against_truth(const Estimate& e, const Truth& truth) {
+  Errors out;
+  const std::vector<TruePose> truth_poses = true_poses(truth, e.reference);
+  for (const DronePose& d : e.drones) {
+    if (!d.resolved) continue;
+    ++out.resolved;
+    for (const TruePose& t : truth_poses) {
+      if (t.id != d.id) continue;
+      out.yaw = std::max(out.yaw, std::abs(std::remainder(d.yaw - t.yaw, 2 * M_PI)));
+      out.position = std::max(out.position, (d.position - t.position).norm());
+    }
+  }
+  return out;
+}
+
+// A swarm in a room that grows with it (side max(4, 2.5·sqrt(N)) m), noise-free unless changed.
+SimOptions swarm(int drones, int rounds, std::uint64_t seed) {
+  SimOptions o;
+  o.drones = drones;
+  o.rounds = rounds;
+  o.seed = seed;
+  o.room = std::max(4.0, 2.5 * std::sqrt(static_cast<double>(drones)));
+  return o;
+}
+
+// The sensor model a user states for exact data: millimetre-level noise and no odometry error.
+NoiseModel exact_sensor() {
+  NoiseModel n;
+  n.floor = 0.002;
+  n.quadratic = 0;
+  n.bearing = 0.0005;
+  n.odometry = 0.001;
+  n.odometry_yaw = 0.0005;
+  return n;
+}
+
+Estimate run(const Scenario& s, Mode mode, int max_rounds = 0, const NoiseModel& noise = exact_sensor()) {
+  EstimateOptions o;
+  o.mode = mode;
+  o.max_rounds = max_rounds;
+  o.noise = noise;
+  return estimate_poses(s.rounds, o);
+}
+
+void expect_exact(const Estimate& e, const Scenario& s, int drones) {
+  ASSERT_EQ(e.status, EstimateStatus::certified) << e.reason;
+  const Errors err = errors_against_truth(e, s.truth);
+  EXPECT_EQ(err.resolved, drones);
+  EXPECT_LT(err.yaw, 1e-6);
+  EXPECT_LT(err.position, 1e-6);
+}
+
+TEST(Estimator, PaperModeRecoversNoiseFreeSwarmWithEnoughRounds) {
+  const Scenario s = generate_scenario(swarm(4, 6, 3));
+  const Estimate e = run(s, Mode::paper);
+  EXPECT_EQ(e.mode, Mode::paper);
+  expect_exact(e, s, 4);
+  EXPECT_EQ(e.rounds_used, 6);
+}
+
+TEST(Estimator, ComplexModeRecoversNoiseFreeSwarmInNMinusOneRounds) {
+  for (int n : {3, 5, 8}) {
+    const Scenario s = generate_scenario(swarm(n, n - 1, 10 + n));
+    SCOPED_TRACE("N = " + std::to_string(n));
+    const Estimate e = run(s, Mode::complex);
+    EXPECT_EQ(e.mode, Mode::complex);
+    expect_exact(e, s, n);
+  }
+}
+
+TEST(Estimator, SummedModesAreNotCertifiedWithTooFewRounds) {
+  const Scenario s = generate_scenario(swarm(6, 2, 4));
+  for (Mode m : {Mode::paper, Mode::complex}) {
+    const Estimate e = run(s, m);
+    EXPECT_EQ(e.status, EstimateStatus::ambiguous) << to_string(m);
+    EXPECT_FALSE(e.unresolved.empty());
+  }
+}
+
+TEST(Estimator, AssociatedModeRecoversNoiseFreeSwarmFromOneRound) {
+  for (int n : {4, 5, 10}) {
+    const Scenario s = generate_scenario(swarm(n, 1, 20 + n));
+    SCOPED_TRACE("N = " + std::to_string(n));
+    expect_exact(run(s, Mode::associated), s, n);
+  }
+}
+
+// One round of 2 or 3 drones gives each pair only its defining mutual pair and at most one shared
+// neighbour: not enough to rule out a coincidence. A second round confirms.
+TEST(Estimator, TwoOrThreeDronesNeedTwoRoundsInAssociatedMode) {
+  for (int n : {2, 3}) {
+    const Scenario s = generate_scenario(swarm(n, 2, 5));
+    const Estimate one = run(s, Mode::associated, 1);
+    EXPECT_EQ(one.status, EstimateStatus::ambiguous);
+    EXPECT_EQ(one.rounds_used, 1);
+    EXPECT_NE(one.reason.find("too little evidence"), std::string::npos) << one.reason;
+    expect_exact(run(s, Mode::associated, 2), s, n);
+  }
+}
+
+TEST(Estimator, AutoPrefersAssociated) {
+  const Scenario s = generate_scenario(swarm(5, 1, 8));
+  const Estimate e = run(s, Mode::automatic);
+  EXPECT_EQ(e.mode, Mode::associated);
+  expect_exact(e, s, 5);
+  EXPECT_EQ(e.timing_us.back().first, "total");
+}
+
+TEST(Estimator, AssociatedErrorIsBoundedUnderDepthNoise) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    SimOptions o = swarm(8, 2, seed);
+    o.noise = NoiseKind::depth;
+    o.range_limit = 6.0;
+    const Scenario s = generate_scenario(o);
+    const Estimate e = run(s, Mode::automatic, 0, NoiseModel{});
+    SCOPED_TRACE("seed " + std::to_string(seed) + ": " + e.reason);
+    if (!e.certified()) continue;  // certification rate is a benchmark figure; wrongness is not allowed
+    const Errors err = errors_against_truth(e, s.truth);
+    EXPECT_LT(err.yaw, 0.03);
+    EXPECT_LT(err.position, 0.15);
+  }
+}
+
+TEST(Estimator, SymmetricFormationAtEqualHeightsIsAmbiguous) {
+  for (int n : {3, 4, 6}) {
+    SimOptions o = swarm(n, 1, 30 + n);
+    o.formation = Formation::polygon;
+    o.equal_heights = true;
+    o.spacing = 2.5;
+    const Scenario s = generate_scenario(o);
+    for (Mode m : {Mode::associated, Mode::automatic}) {
+      const Estimate e = run(s, m, 0, NoiseModel{});
+      SCOPED_TRACE("N = " + std::to_string(n) + " " + to_string(m) + ": " + e.reason);
+      EXPECT_EQ(e.status, EstimateStatus::ambiguous);
+      EXPECT_FALSE(e.unresolved.empty());
+    }
+  }
+}
+
+TEST(Estimator, DroneOutOfRangeOfEveryoneIsNamedUnresolved) {
+  SimOptions o = swarm(4, 2, 3);
+  o.formation = Formation::given;
+  o.positions = {{0, 0, 1.5}, {2, 0.5, 1.2}, {0.5, 2.5, 1.8}, {30, 30, 1.5}};
+  o.room = 80;
+  o.move = 0;
+  o.range_limit = 6;
+  const Scenario s = generate_scenario(o);
+  const Estimate e = run(s, Mode::associated);
+  EXPECT_EQ(e.status, EstimateStatus::ambiguous);
+  ASSERT_EQ(e.unresolved.size(), 1u);
+  EXPECT_EQ(e.unresolved[0], s.rounds.drones[3]);
+  EXPECT_NE(e.reason.find(std::to_string(s.rounds.drones[3])), std::string::npos) << e.reason;
+  // The three that see each other are still right.
+  const Errors err = errors_against_truth(e, s.truth);
+  EXPECT_EQ(err.resolved, 3);
+  EXPECT_LT(err.yaw, 1e-6);
+}
+
+TEST(Estimator, NeverCertifiesWrongWithFalsePositivesMissesAndObstacles) {
+  int certified = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    SimOptions o = swarm(6, 4, 100 + seed);
+    o.noise = NoiseKind::depth;
+    o.range_limit = 6;
+    o.false_positives = 0.3;
+    o.miss_rate = 0.1;
+    o.obstacles = 3;
+    o.room = 7;
+    const Scenario s = generate_scenario(o);
+    const Estimate e = run(s, Mode::automatic, 0, NoiseModel{});
+    if (!e.certified()) continue;
+    ++certified;
+    const Errors err = errors_against_truth(e, s.truth);
+    EXPECT_LT(err.yaw, 0.1) << "seed " << seed;
+    EXPECT_LT(err.position, 0.3) << "seed " << seed;
+  }
+  EXPECT_GE(certified, 6);  // most of them certify; the rate itself is a benchmark figure
+}
+
+// --- invalid input -------------------------------------------------------------------------
+
+Rounds small_rounds() { return generate_scenario(swarm(3, 2, 1)).rounds; }
+
+void expect_invalid(const Rounds& r, const EstimateOptions& o, const std::vector<std::string>& words) {
+  const Estimate e = estimate_poses(r, o);
+  EXPECT_EQ(e.status, EstimateStatus::invalid_input);
+  for (const std::string& w : words) EXPECT_NE(e.reason.find(w), std::string::npos) << e.reason << " lacks " << w;
+}
+
+TEST(EstimatorInput, NaNInAVectorNamesRoundDroneAndField) {
+  Rounds r = small_rounds();
+  const int id = r.drones[1];
+  r.rounds[1].drones[id].observations.at(0).vector.y() = std::numeric_limits<double>::quiet_NaN();
+  expect_invalid(r, {}, {"round 1", "drone " + std::to_string(id), "observations[0].vector[1]", "nan"});
+}
+
+TEST(EstimatorInput, InfiniteOdometryIsNamed) {
+  Rounds r = small_rounds();
+  const int id = r.drones[0];
+  r.rounds[0].drones[id].position.z() = std::numeric_limits<double>::infinity();
+  expect_invalid(r, {}, {"round 0", "position[2]", "inf"});
+  r = small_rounds();
+  r.rounds[0].drones[id].observations.at(0).odom_yaw = std::nan("");
+  expect_invalid(r, {}, {"odom_yaw", "nan"});
+}
+
+TEST(EstimatorInput, UnknownDroneDuplicateIdsAndTooFewDrones) {
+  Rounds r = small_rounds();
+  r.rounds[0].drones[77] = DroneRound{};
+  expect_invalid(r, {}, {"drone 77", "not in the swarm"});
+  r = small_rounds();
+  r.drones.push_back(r.drones[0]);
+  expect_invalid(r, {}, {"listed twice"});
+  r = small_rounds();
+  r.drones.resize(1);
+  for (Round& round : r.rounds) round.drones.erase(std::next(round.drones.begin()), round.drones.end());
+  expect_invalid(r, {}, {"at least 2"});
+  r = small_rounds();
+  r.rounds.clear();
+  expect_invalid(r, {}, {"no rounds"});
+}
+
+TEST(EstimatorInput, ZeroVectorReferenceRoundsAndNoise) {
+  Rounds r = small_rounds();
+  r.rounds[0].drones.begin()->second.observations.at(0).vector.setZero();
+  expect_invalid(r, {}, {"vector has length 0"});
+  EstimateOptions o;
+  o.reference = 99;
+  expect_invalid(small_rounds(), o, {"reference", "99"});
+  o = {};
+  o.max_rounds = -2;
+  expect_invalid(small_rounds(), o, {"max_rounds", "-2"});
+  o = {};
+  o.noise.bearing = -1;
+  expect_invalid(small_rounds(), o, {"noise.bearing", "-1"});
+  o = {};
+  o.noise.gate = std::nan("");
+  expect_invalid(small_rounds(), o, {"noise.gate", "nan"});
+}
+
+TEST(EstimatorInput, ReferenceChoiceMovesTheFrame) {
+  const Scenario s = generate_scenario(swarm(4, 1, 9));
+  EstimateOptions o;
+  o.noise = exact_sensor();
+  o.reference = s.rounds.drones[2];
+  const Estimate e = estimate_poses(s.rounds, o);
+  ASSERT_TRUE(e.certified()) << e.reason;
+  EXPECT_EQ(e.reference, s.rounds.drones[2]);
+  for (const DronePose& d : e.drones)
+    if (d.id == e.reference) {
+      EXPECT_NEAR(d.yaw, 0, 1e-12);
+      EXPECT_NEAR(d.position.norm(), 0, 1e-12);
+    }
+  EXPECT_LT(errors_against_truth(e, s.truth).yaw, 1e-6);
+}
+
+}  // namespace
+}  // namespace fact
