@@ -95,7 +95,7 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
     thread_local std::vector<Eigen::Vector3d> mapped;
     thread_local std::vector<Eigen::Matrix3d> mapped_cov;  // j's covariances in f_i axes
     mapped.clear(), mapped_cov.clear();
-    for (const Point& b : B) mapped.push_back(pose.map(b.x)), mapped_cov.push_back(R * b.cov * R.transpose());
+    for (const Point& b : B) mapped.push_back(R * b.x + pose.t), mapped_cov.push_back(R * b.cov * R.transpose());
     // Normalised squared distance and log-likelihood ratio (inlier against clutter) of every
     // admissible pairing; own position ↔ own position is not a pairing.
     const size_t nb = B.size();
