@@ -171,6 +171,12 @@ Estimate run_mode(Mode mode, const estimator::Problem& p, const sdp::Options& o)
 Estimate run_automatic(const estimator::Problem& p, const sdp::Options& o) {
   std::vector<Estimate> tried;
   for (Mode m : {Mode::associated, Mode::complex, Mode::paper}) {
+    if (m != Mode::associated && p.rounds() < p.drones() - 1) {
+      // Each round of summed data is one complex equation in the N − 1 unknown yaws.
+      tried.front().reason += "; summed modes skipped: they need at least N - 1 = " +
+                              std::to_string(p.drones() - 1) + " rounds, " + std::to_string(p.rounds()) + " given";
+      break;
+    }
     tried.push_back(run_mode(m, p, o));
     if (tried.back().certified()) break;
   }

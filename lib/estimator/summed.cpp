@@ -88,11 +88,6 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
   out.mode = complex ? Mode::complex : Mode::paper;
   out.status = EstimateStatus::ambiguous;
   for (int id : p.ids) out.drones.push_back(DronePose{id, 0.0, Eigen::Vector3d::Zero(), false});
-  if (p.rounds() < p.drones() - 1) {  // each round gives one complex equation in N − 1 unknown yaws
-    out.reason = "the summed cost needs at least N - 1 = " + std::to_string(p.drones() - 1) +
-                 " rounds to fix every yaw; " + std::to_string(p.rounds()) + " given";
-    return out;
-  }
   auto t = Clock::now();
   const Eigen::MatrixXd Q = paper_cost(detection_sums(p));  // 2N × 2N, PSD, rank ≤ K
   if (Q.norm() < 1e-12) {
@@ -102,11 +97,16 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
   const sdp::Result sdp = sdp::solve(complex ? sdp::complex_form(Q) : Q, 2, sdp_options);
   out.timing_us.emplace_back("rotation", micros(t));
   out.certificate = certificate_of(sdp);
-  if (sdp.status != sdp::Status::certified_unique) {
-    out.reason = std::string("rotation SDP ") + sdp::to_string(sdp.status) + ": " + sdp.reason +
-                 (sdp.status == sdp::Status::certified_not_unique ? " (too few rounds for the summed cost)" : "");
+  if (sdp.Y.cols() < 2) {
+    out.reason = std::string("rotation SDP ") + sdp::to_string(sdp.status) + ": " + sdp.reason;
     return out;
   }
+  // Not unique or not certified: the rounded poses are still reported (as the paper does), but
+  // no drone counts as resolved.
+  const bool unique = sdp.status == sdp::Status::certified_unique;
+  const std::string sdp_problem =
+      unique ? "" : std::string("rotation SDP ") + sdp::to_string(sdp.status) + ": " + sdp.reason +
+                        (sdp.status == sdp::Status::certified_not_unique ? " (too few rounds for the summed cost)" : "");
   const std::vector<double> yaw = yaws_from_sdp(sdp, p.reference);
   std::vector<Eigen::Matrix3d> R;
   for (double y : yaw) R.push_back(yaw_rotation(y));
@@ -120,8 +120,12 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
   out.timing_us.emplace_back("translation", micros(t));
   std::string missing;
   for (int i = 0; i < p.drones(); ++i) {
-    out.drones[i] = DronePose{p.ids[i], yaw[i], ts.t[i], ts.connected[i]};
+    out.drones[i] = DronePose{p.ids[i], yaw[i], ts.t[i], ts.connected[i] && (unique || i == p.reference)};
     if (!ts.connected[i]) missing += (missing.empty() ? "" : ", ") + std::to_string(p.ids[i]);
+  }
+  if (!unique) {
+    out.reason = sdp_problem;
+    return out;
   }
   if (!missing.empty()) {
     out.reason = "no matched detections connect drone(s) " + missing + " to the reference";
