@@ -241,7 +241,7 @@ struct Summary {
 
 std::string repro(const fact::SimOptions& o, fact::Mode mode, int k) {
   std::ostringstream s;
-  s << "fact-simgen --drones " << o.drones << " --rounds " << o.rounds << " --room " << o.room
+  s << std::setprecision(17) << "fact-simgen --drones " << o.drones << " --rounds " << o.rounds << " --room " << o.room
     << " --formation " << fact::to_string(o.formation) << (o.equal_heights ? " --equal-heights" : "")
     << " --spacing " << o.spacing << " --noise " << fact::to_string(o.noise);
   if (o.noise == fact::NoiseKind::paper) s << " --paper-sigma " << o.paper_sigma;
@@ -264,6 +264,7 @@ const double kPaperGn[] = {0.012, 0.034, 0.081, 0.271, 0.388, 1.016, 3.434};
 struct MethodStats {
   std::vector<double> us, mae_per_scenario, errors;
   int certified = 0, unique = 0, global = 0, global_known = 0;
+  int tight = 0, tight_known = 0;  // sdp_plain: its optimum equals the rotation optimum
 };
 
 void table1(const Args& a, Summary& sum) {
@@ -279,8 +280,11 @@ void table1(const Args& a, Summary& sum) {
               "yaw_mae_rad: mean |yaw error| of drones 1..N-1 relative to drone 0, all scenarios, SDP rounded whatever its status.",
               "certified_fraction: SDP optimality certified (certified_unique or certified_not_unique); unique_fraction: unique.",
               "global_fraction: GN/LM final cost within 1e-6 (relative) of the certified complex-form optimum (scenarios where it certified).",
+              "tight_fraction (sdp_plain): its certified optimum equals that rotation optimum (within 1e-6); when it is lower the",
+              "plain O(2) relaxation chose a reflected or higher-rank solution and its rounding is a guess.",
               "paper_s: the paper's seconds per solve for that method (MOSEK for both SDP rows)."},
-             "n,method,scenarios,median_us,mean_us,p95_us,yaw_mae_rad,certified_fraction,unique_fraction,global_fraction,paper_s");
+             "n,method,scenarios,median_us,mean_us,p95_us,yaw_mae_rad,certified_fraction,unique_fraction,global_fraction,paper_s,"
+             "tight_fraction");
   sum.files.push_back(out.path);
   std::cout << "== Table I: rotation solve time (N = 2.." << max_n << ", " << scenarios << " scenarios)\n";
   const std::vector<std::string> methods = {"sdp_plain", "sdp_complex", "gn_zero", "lm_zero", "gn_multi", "lm_multi"};
@@ -294,6 +298,8 @@ void table1(const Args& a, Summary& sum) {
       const Eigen::MatrixXd Q = fact::paper_cost(sums);
       const std::vector<double> truth = true_yaws(sc.truth);
       double complex_optimum = kNaN;
+      double plain_objective = kNaN, plain_error = kNaN;
+      bool plain_unique = false;
       for (const std::string& m : methods) {
         std::vector<double> times;
         std::vector<double> yaw;
@@ -308,6 +314,10 @@ void table1(const Args& a, Summary& sum) {
             cert = res.certified();
             uniq = res.status == fact::sdp::Status::certified_unique;
             if (m == "sdp_complex" && cert) complex_optimum = res.objective / 2;  // ⟨Q̃, X⟩ = 2 tr(QZ) at rotations
+            if (m == "sdp_plain") {
+              plain_objective = cert ? res.objective : kNaN;
+              plain_unique = uniq;
+            }
             try {
               yaw = fact::sdp::rotation_angles(fact::sdp::round_rotations(res, 0));
             } catch (const std::exception&) {
@@ -329,12 +339,29 @@ void table1(const Args& a, Summary& sum) {
         MethodStats& ms = st[m];
         ms.us.push_back(median(times));
         const std::vector<double> e = yaw_errors(yaw, truth);
+        if (m == "sdp_plain") plain_error = e.empty() ? kNaN : *std::max_element(e.begin(), e.end());
         ms.errors.insert(ms.errors.end(), e.begin(), e.end());
         ms.certified += cert;
         ms.unique += uniq;
         if (std::isfinite(cost) && std::isfinite(complex_optimum)) {
           ++ms.global_known;
           ms.global += cost <= complex_optimum * (1 + 1e-6) + 1e-12 * Q.trace();
+        }
+      }
+      // The plain relaxation is over O(2)^N: its certified optimum can lie below every rotation
+      // solution (a reflected block, or rank > 2), and then rounding it is a guess.
+      if (std::isfinite(plain_objective) && std::isfinite(complex_optimum)) {
+        MethodStats& ms = st["sdp_plain"];
+        ++ms.tight_known;
+        const bool tight = plain_objective >= complex_optimum * (1 - 1e-6) - 1e-12 * Q.trace();
+        ms.tight += tight;
+        if (!tight && plain_unique && plain_error > kWrongYaw) {
+          std::ostringstream w;
+          w << "table1: plain SDP certified_unique but not tight (objective " << plain_objective
+            << " < rotation optimum " << complex_optimum << "), rounded yaw off by up to " << fixed(plain_error, 3)
+            << " rad: N=" << n << " seed " << scenario_seed(a, 1, n, s) << " (paper noise 0.05, K=" << n + 1
+            << ", room 10, all-to-all)";
+          sum.surprises.push_back(w.str());
         }
       }
     }
@@ -347,16 +374,19 @@ void table1(const Args& a, Summary& sum) {
       const double mae = mean(ms.errors);
       out.row(n, m, scenarios, num(median(ms.us)), num(mean(ms.us)), num(p95(ms.us)), num(mae),
               sdp ? num(double(ms.certified) / scenarios) : "", sdp ? num(double(ms.unique) / scenarios) : "",
-              sdp || ms.global_known == 0 ? "" : num(double(ms.global) / ms.global_known), num(paper));
+              sdp || ms.global_known == 0 ? "" : num(double(ms.global) / ms.global_known), num(paper),
+              ms.tight_known ? num(double(ms.tight) / ms.tight_known) : "");
       std::cout << "  table1 N=" << n << " " << std::left << std::setw(11) << m << std::right << " median "
                 << std::setw(9) << fixed(median(ms.us), 1) << " us  p95 " << std::setw(9) << fixed(p95(ms.us), 1)
                 << " us  yaw MAE " << fixed(mae, 4) << " rad";
       if (sdp) std::cout << "  certified " << ms.certified << "/" << scenarios << " unique " << ms.unique;
+      if (ms.tight_known) std::cout << " tight " << ms.tight << "/" << ms.tight_known;
       else if (ms.global_known) std::cout << "  global " << ms.global << "/" << ms.global_known;
       std::cout << "  (paper " << paper * 1e6 << " us)\n";
       line << std::setw(12) << fixed(median(ms.us), 0) << "[" << paper << "]";
     }
-    line << " | " << fixed(mean(st["sdp_plain"].errors), 3) << " / " << fixed(mean(st["sdp_complex"].errors), 3);
+    line << " | " << fixed(mean(st["sdp_plain"].errors), 3) << " / " << fixed(mean(st["sdp_complex"].errors), 3)
+         << "  plain tight " << st["sdp_plain"].tight << "/" << st["sdp_plain"].tight_known;
     sum.text << line.str() << "\n";
   }
 }
@@ -815,7 +845,8 @@ int main(int argc, char** argv) {
     section("symmetric", symmetric_table);
     section("speed", speed_table);
     const double seconds = micros_since(start) / 1e6;
-    sum.text << "\nSurprises (wrong-certified results, certified symmetric formations):"
+    sum.text << "\nSurprises (wrong-certified results, certified symmetric formations, certified-unique plain SDPs that"
+                " are not tight and round wrong):"
              << (sum.surprises.empty() ? " none\n" : "\n");
     for (const std::string& s : sum.surprises) sum.text << "  " << s << "\n";
     sum.text << "\nRun time " << fixed(seconds, 1) << " s. Files:\n";

@@ -72,10 +72,9 @@ struct Hypothesis {
   int round = 0, a = 0, b = 0;            // defining pair: detection a of i, b of j
   RelativePose pose;
   double yaw_sigma = 0;                   // rad, σ of pose.yaw
-  std::vector<Correspondence> matches;    // verified, all rounds (x_i in f_i, x_j in f_j)
-  std::vector<Link> links;                // which points each match joins, same order
+  std::vector<Link> links;                // verified matches, all rounds: which points each joins
   double score = 0;                       // Σ log-likelihood ratio of the matches (inlier vs clutter)
-  int evidence() const { return static_cast<int>(matches.size()); }
+  int evidence() const { return static_cast<int>(links.size()); }
 };
 
 // Mutual-nearest-neighbour matches of j's points (mapped by pose) to i's points, every round.
@@ -83,7 +82,6 @@ struct Hypothesis {
 template <class Spread>
 void verify(const Problem& p, const PointSets& points, int i, int j, const RelativePose& pose, Spread spread,
             Hypothesis* h) {
-  h->matches.clear();
   h->links.clear();
   h->score = 0;
   const double gate2 = p.noise.gate * p.noise.gate;
@@ -93,14 +91,17 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
     const std::vector<Point>&A = points[k][i], &B = points[k][j];
     const Eigen::Matrix3d R = yaw_rotation(pose.yaw);
     thread_local std::vector<Eigen::Vector3d> mapped;
-    thread_local std::vector<Eigen::Matrix3d> mapped_cov;  // j's covariances in f_i axes
-    mapped.clear(), mapped_cov.clear();
-    for (const Point& b : B) mapped.push_back(R * b.x + pose.t), mapped_cov.push_back(R * b.cov * R.transpose());
+    thread_local std::vector<Eigen::Matrix3d> mapped_cov;  // j's covariances in f_i axes, made when first needed
+    thread_local std::vector<char> have_cov;
+    mapped.clear();
+    for (const Point& b : B) mapped.push_back(R * b.x + pose.t);
+    mapped_cov.resize(B.size());
+    have_cov.assign(B.size(), 0);
     // Normalised squared distance and log-likelihood ratio (inlier against clutter) of every
     // admissible pairing; own position ↔ own position is not a pairing.
     const size_t nb = B.size();
-    thread_local std::vector<double> d2, llr;
-    d2.assign(A.size() * nb, std::numeric_limits<double>::infinity()), llr.assign(A.size() * nb, 0.0);
+    thread_local std::vector<double> d2, det_s;
+    d2.assign(A.size() * nb, std::numeric_limits<double>::infinity()), det_s.resize(A.size() * nb);
     for (size_t a = 0; a < A.size(); ++a)
       for (size_t b = 0; b < nb; ++b) {
         if (A[a].det < 0 && B[b].det < 0) continue;
@@ -109,14 +110,17 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
         // r Σ⁻¹ r ≥ |r|² / λ_max(Σ): most pairs fail the gate on this bound alone.
         const double bound = A[a].sigma * A[a].sigma + B[b].sigma * B[b].sigma + s * s;
         if (r.squaredNorm() > gate2 * bound) continue;
+        if (!have_cov[b]) mapped_cov[b] = R * B[b].cov * R.transpose(), have_cov[b] = 1;
         const Eigen::Matrix3d S = A[a].cov + mapped_cov[b] + s * s * Eigen::Matrix3d::Identity();
-        const Eigen::LLT<Eigen::Matrix3d> llt(S);
-        const Eigen::Vector3d w = llt.matrixL().solve(r);  // S = L Lᵀ, d² = |L⁻¹ r|²
-        d2[a * nb + b] = w.squaredNorm();
-        const Eigen::Vector3d diag = llt.matrixL().toDenseMatrix().diagonal();
-        // log det(2πS) = 3 log 2π + 2 Σ log L_kk
-        llr[a * nb + b] = std::log(kClutterVolume) - 1.5 * std::log(2 * M_PI) -
-                          std::log(diag.prod()) - 0.5 * d2[a * nb + b];
+        // S⁻¹ = adj(S) / det(S) by cofactors (S symmetric positive definite, 3 × 3).
+        const double c00 = S(1, 1) * S(2, 2) - S(1, 2) * S(1, 2), c01 = S(0, 2) * S(1, 2) - S(0, 1) * S(2, 2),
+                     c02 = S(0, 1) * S(1, 2) - S(0, 2) * S(1, 1), c11 = S(0, 0) * S(2, 2) - S(0, 2) * S(0, 2),
+                     c12 = S(0, 1) * S(0, 2) - S(0, 0) * S(1, 2), c22 = S(0, 0) * S(1, 1) - S(0, 1) * S(0, 1);
+        const double det = S(0, 0) * c00 + S(0, 1) * c01 + S(0, 2) * c02;
+        const double q = r.x() * (c00 * r.x() + 2 * (c01 * r.y() + c02 * r.z())) +
+                         r.y() * (c11 * r.y() + 2 * c12 * r.z()) + r.z() * c22 * r.z();
+        d2[a * nb + b] = q / det;
+        det_s[a * nb + b] = det;  // det(S); its log is taken for matches only
       }
     thread_local std::vector<int> best_b, best_a;
     thread_local std::vector<double> cost_b, cost_a;
@@ -131,13 +135,26 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
     for (size_t a = 0; a < A.size(); ++a) {
       const int b = best_b[a];
       if (b < 0 || best_a[b] != static_cast<int>(a) || cost_b[a] > gate2) continue;
-      const double evidence = llr[a * nb + b];
+      // log-likelihood ratio of inlier against clutter: log V − ½ log det(2πS) − ½ d²
+      const double evidence = std::log(kClutterVolume) - 1.5 * std::log(2 * M_PI) -
+                              0.5 * std::log(det_s[a * nb + b]) - 0.5 * cost_b[a];
       if (evidence <= 0) continue;
       h->score += evidence;
-      h->matches.push_back({i, j, A[a].x, B[b].x, std::hypot(A[a].sigma, B[b].sigma), A[a].cov, B[b].cov});
       h->links.push_back({k, A[a].det, B[b].det});
     }
   }
+}
+
+// The point pairs that links join: x_i in f_i, x_j in f_j, with their covariances.
+std::vector<Correspondence> correspondences(const PointSets& points, int i, int j, const std::vector<Link>& links) {
+  std::vector<Correspondence> out;
+  out.reserve(links.size());
+  for (const Link& l : links) {
+    const Point& a = points[l.round][i][l.det_i + 1];  // index 0 is the own position (det −1)
+    const Point& b = points[l.round][j][l.det_j + 1];
+    out.push_back({i, j, a.x, b.x, std::hypot(a.sigma, b.sigma), a.cov, b.cov});
+  }
+  return out;
 }
 
 // Weighted Procrustes for a yaw and a 3-D translation: min Σ w ‖x_i − R(θ) x_j − t‖².
@@ -173,7 +190,9 @@ bool pair_pose(const Problem& p, const Detection& da, const Detection& db, Relat
   const double z_sd = std::sqrt(da.cov(2, 2) + db.cov(2, 2));
   if (std::abs(da.range - db.range) > p.noise.gate * range_sd) return false;
   if (std::abs(da.body.z() + db.body.z()) > p.noise.gate * z_sd) return false;
-  const double s = std::sqrt(da.sigma * da.sigma + db.sigma * db.sigma);
+  // Yaw σ of the pair: the across-ray errors of both ends over the horizontal length.
+  const double across = 0.5 * (da.cov.trace() - ua3.dot(da.cov * ua3) + db.cov.trace() - ub3.dot(db.cov * ub3));
+  const double s = std::sqrt(across);
   const Eigen::Vector2d ua = da.direction.head<2>(), ub = db.direction.head<2>();
   if (ua.norm() < kMinHorizontal || ub.norm() < kMinHorizontal) return false;
   pose->yaw = wrap_angle(std::atan2(ua.y(), ua.x()) - std::atan2(-ub.y(), -ub.x()));
@@ -205,13 +224,14 @@ std::vector<Hypothesis> hypotheses(const Problem& p, const PointSets& points, in
         const auto known = [&](const Hypothesis& g) { return explains(g, k, h.a, h.b); };
         if (std::any_of(out.begin(), out.end(), known)) continue;
         const Eigen::Vector3d anchor = vi.detections[a].observer;
+        // Two passes: loose around the pair's own pose, then around the refined one. Fewer than
+        // kMinEvidence matches cannot make an edge; such a hypothesis stays as a possible rival.
         for (int pass = 0; pass < 2; ++pass) {
           const double ys = h.yaw_sigma;
           const RelativePose pose = h.pose;
           verify(p, points, i, j, pose, [&](const Eigen::Vector3d& x) { return ys * (x - anchor).norm(); }, &h);
-          if (h.evidence() < kMinEvidence) break;  // cannot become an edge; its loose score serves as a rival
-          if (h.matches.size() < 2) break;
-          h.pose = procrustes(h.matches, &h.yaw_sigma);
+          if (h.evidence() < kMinEvidence) break;
+          h.pose = procrustes(correspondences(points, i, j, h.links), &h.yaw_sigma);
         }
         if (h.evidence() >= 2) out.push_back(std::move(h));
       }
@@ -427,13 +447,13 @@ bool synchronise(const Problem& p, std::vector<Edge>* edges, Solution* s, const 
 }
 
 // Translations over every verified correspondence; drops the edge of the worst residual.
-bool translate(const Problem& p, std::vector<Edge>* edges, Solution* s) {
+bool translate(const Problem& p, const PointSets& points, std::vector<Edge>* edges, Solution* s) {
   std::vector<Correspondence> cs;
   std::vector<Edge*> owner;
   for (Edge& e : *edges) {
     if (e.kind != EdgeKind::accepted || e.dropped) continue;
     if (!std::count(s->members.begin(), s->members.end(), e.i)) continue;
-    for (const Correspondence& c : e.best.matches) cs.push_back(c), owner.push_back(&e);
+    for (const Correspondence& c : correspondences(points, e.i, e.j, e.best.links)) cs.push_back(c), owner.push_back(&e);
   }
   s->translation = solve_translations(p.drones(), p.reference, s->yaw, cs);
   s->correspondences = cs;
@@ -442,7 +462,7 @@ bool translate(const Problem& p, std::vector<Edge>* edges, Solution* s) {
   return false;
 }
 
-Solution solve_graph(const Problem& p, std::vector<Edge>* edges, const sdp::Options& o) {
+Solution solve_graph(const Problem& p, const PointSets& points, std::vector<Edge>* edges, const sdp::Options& o) {
   Solution s;
   assemble(p, edges);
   for (;;) {
@@ -450,7 +470,7 @@ Solution solve_graph(const Problem& p, std::vector<Edge>* edges, const sdp::Opti
     if (s.members.size() < 2) return s;
     if (!synchronise(p, edges, &s, o)) continue;
     if (!s.sdp.certified()) return s;
-    if (!translate(p, edges, &s)) continue;
+    if (!translate(p, points, edges, &s)) continue;
     s.conflict = final_overlap(p, s);
     s.consistent = s.conflict.empty();
     return s;
@@ -474,7 +494,7 @@ Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) 
     for (int j = i + 1; j < p.drones(); ++j) edges.push_back(judge_pair(p, points, i, j));
   out.timing_us.emplace_back("association", micros(t));
   t = Clock::now();
-  const Solution s = solve_graph(p, &edges, sdp_options);
+  const Solution s = solve_graph(p, points, &edges, sdp_options);
   out.timing_us.emplace_back("synchronisation", micros(t));
   if (s.members.size() >= 2) out.certificate = certificate_of(s.sdp);
   std::vector<int> outside;
@@ -502,7 +522,7 @@ Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) 
   if (std::string e = precision_problem(p, sigma); !e.empty()) {
     out.reason = e;
     for (int i = 0; i < p.drones(); ++i)
-      if (sigma[i].yaw > p.max_yaw_sigma || sigma[i].position > p.max_position_sigma) out.drones[i].resolved = false;
+      if (!precise(p, sigma[i])) out.drones[i].resolved = false;
     return out;
   }
   int used = 0, matched = 0;

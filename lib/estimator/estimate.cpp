@@ -1,7 +1,6 @@
 // estimate_poses: input checks, the problem's indexed form, and the choice of mode.
 #include "internal.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -59,7 +58,8 @@ double wrap_angle(double a) {
 
 // Covariance (m², f_i axes) of a detected centre at `direction` (m, f_i axes): range noise along
 // the ray, bearing noise across it, a centring floor, and the odometry's position and yaw error.
-Eigen::Matrix3d detection_covariance(const NoiseModel& n, const Eigen::Vector3d& direction) {
+// Also gives the largest σ (m).
+Eigen::Matrix3d detection_covariance(const NoiseModel& n, const Eigen::Vector3d& direction, double* largest_sigma) {
   const double d = direction.norm();
   const Eigen::Vector3d u = direction / d;
   const double range_sd = n.linear * d + n.quadratic * d * d;
@@ -67,6 +67,7 @@ Eigen::Matrix3d detection_covariance(const NoiseModel& n, const Eigen::Vector3d&
   const double across = n.floor * n.floor + std::pow(n.bearing * d, 2) + n.odometry * n.odometry +
                         std::pow(n.odometry_yaw * d, 2);
   const Eigen::Matrix3d ray = u * u.transpose();
+  *largest_sigma = std::sqrt(std::max(along, across));
   return along * ray + across * (Eigen::Matrix3d::Identity() - ray);
 }
 
@@ -90,8 +91,7 @@ Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel
         d.direction = yaw_rotation(obs.odom_yaw) * obs.vector;
         d.target = d.observer + d.direction;
         d.range = obs.vector.norm();
-        d.cov = detection_covariance(noise, d.direction);
-        d.sigma = std::sqrt(d.cov.eigenvalues().real().maxCoeff());
+        d.cov = detection_covariance(noise, d.direction, &d.sigma);
         v.detections.push_back(d);
       }
     }
@@ -110,8 +110,20 @@ Certificate certificate_of(const sdp::Result& r) {
   return c;
 }
 
+bool precise(const Problem& p, const PoseSigma& s) {
+  return s.yaw <= p.max_yaw_sigma && s.position <= p.max_position_sigma && s.yaw_step <= p.max_yaw_sigma &&
+         s.position_step <= p.max_position_sigma;
+}
+
 std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma) {
   for (size_t i = 0; i < sigma.size(); ++i) {
+    if (sigma[i].yaw_step > p.max_yaw_sigma || sigma[i].position_step > p.max_position_sigma) {
+      std::ostringstream s;
+      s << "drone " << p.ids[i] << " disagrees with its matched detections: their best fit is " << sigma[i].yaw_step
+        << " rad and " << sigma[i].position_step << " m away (limits " << p.max_yaw_sigma << " rad, "
+        << p.max_position_sigma << " m)";
+      return s.str();
+    }
     if (sigma[i].yaw > p.max_yaw_sigma || sigma[i].position > p.max_position_sigma) {
       std::ostringstream s;
       s << "drone " << p.ids[i] << " is too uncertain to certify: yaw sigma " << sigma[i].yaw << " rad (limit "

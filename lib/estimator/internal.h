@@ -77,6 +77,10 @@ TranslationSolution solve_translations(int drones, int reference, const std::vec
 struct PoseSigma {
   double yaw = 0;
   double position = 0;
+  // The Gauss–Newton step from the estimate to the poses that best fit the correspondences
+  // (rad, m). A large step means the estimate disagrees with its own matched detections.
+  double yaw_step = 0;
+  double position_step = 0;
 };
 // From the correspondences' information at the solution (yaw[i], t[i]: pose of f_i in f_ref).
 // Unconnected drones and the reference get 0.
@@ -84,6 +88,8 @@ std::vector<PoseSigma> pose_uncertainty(int drones, int reference, const std::ve
                                         const std::vector<Eigen::Vector3d>& t, const std::vector<bool>& connected,
                                         const std::vector<Correspondence>& correspondences);
 
+// True when one drone's pose is precise enough and agrees with its detections.
+bool precise(const Problem& p, const PoseSigma& s);
 // "" when every connected drone's pose is precise enough to certify, else which is not and why.
 std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma);
 

@@ -26,18 +26,24 @@ std::string check_scalar(double v, const std::string& field) {
   return std::isfinite(v) ? "" : field + " is " + number(v);
 }
 
+bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+// Names the first bad field of one observation ("" if none). Strings are built only on error.
+std::string check_observation(const Observation& obs, size_t o) {
+  if (finite(obs.odom_position) && std::isfinite(obs.odom_yaw) && finite(obs.vector) && obs.vector.norm() >= 1e-6)
+    return "";
+  const std::string at = "observations[" + std::to_string(o) + "].";
+  std::string e = check_vector(obs.odom_position, at + "odom_position");
+  if (e.empty()) e = check_scalar(obs.odom_yaw, at + "odom_yaw");
+  if (e.empty()) e = check_vector(obs.vector, at + "vector");
+  if (e.empty()) e = at + "vector has length " + number(obs.vector.norm()) + " m (a detection must point somewhere)";
+  return e;
+}
+
 std::string check_drone(const DroneRound& d) {
   std::string e = check_vector(d.position, "position");
   if (e.empty()) e = check_scalar(d.yaw, "yaw");
-  for (size_t o = 0; e.empty() && o < d.observations.size(); ++o) {
-    const Observation& obs = d.observations[o];
-    const std::string at = "observations[" + std::to_string(o) + "].";
-    e = check_vector(obs.odom_position, at + "odom_position");
-    if (e.empty()) e = check_scalar(obs.odom_yaw, at + "odom_yaw");
-    if (e.empty()) e = check_vector(obs.vector, at + "vector");
-    if (e.empty() && obs.vector.norm() < 1e-6)
-      e = at + "vector has length " + number(obs.vector.norm()) + " m (a detection must point somewhere)";
-  }
+  for (size_t o = 0; e.empty() && o < d.observations.size(); ++o) e = check_observation(d.observations[o], o);
   return e;
 }
 
@@ -53,11 +59,11 @@ std::string validate_rounds(const Rounds& rounds) {
   if (rounds.rounds.empty()) return "rounds: no rounds";
   for (size_t k = 0; k < rounds.rounds.size(); ++k) {
     const Round& round = rounds.rounds[k];
-    const std::string at = "round " + std::to_string(k) + " (index " + std::to_string(round.index) + "): ";
+    const auto at = [&] { return "round " + std::to_string(k) + " (index " + std::to_string(round.index) + "): "; };
     for (const auto& [id, drone] : round.drones) {
-      if (!ids.count(id)) return at + "drone " + std::to_string(id) + " is not in the swarm's drone list";
+      if (!ids.count(id)) return at() + "drone " + std::to_string(id) + " is not in the swarm's drone list";
       const std::string e = check_drone(drone);
-      if (!e.empty()) return at + "drone " + std::to_string(id) + ": " + e;
+      if (!e.empty()) return at() + "drone " + std::to_string(id) + ": " + e;
     }
   }
   return "";

@@ -9,7 +9,9 @@
 #include "internal.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 
 namespace fact::estimator {
 namespace {
@@ -81,6 +83,36 @@ void add_pair(const Problem& p, int k, const Ref& a, const Ref& b, std::vector<C
   out->push_back({a.drone, b.drone, da.observer, db.target, db.sigma, own, db.cov});
 }
 
+// ⟨C, X⟩ at the rounded rotations: X_ij = R_iᵀ R_j, i.e. X = V Vᵀ with block i of V (2N × 2)
+// equal to R(yaw_i)ᵀ.
+double rounded_cost(const Eigen::MatrixXd& C, const std::vector<double>& yaw) {
+  Eigen::MatrixXd V(2 * yaw.size(), 2);
+  for (size_t i = 0; i < yaw.size(); ++i) V.block<2, 2>(2 * i, 0) = Eigen::Rotation2Dd(-yaw[i]).toRotationMatrix();
+  return (V.transpose() * C * V).trace();
+}
+
+// "" when the SDP's rotations are the certified unique optimum of the summed cost, else why not:
+// too few rounds, a non-unique or uncertified optimum, or a relaxation that is not tight (its
+// optimum is not a set of rotations, e.g. a reflected block, so rounding loses optimality).
+std::string rotation_problem(const Problem& p, const sdp::Result& sdp, const Eigen::MatrixXd& C,
+                             const std::vector<double>& yaw) {
+  if (p.rounds() < p.drones() - 1)  // each round is one complex equation in the N − 1 unknown yaws
+    return "the summed cost needs at least N - 1 = " + std::to_string(p.drones() - 1) + " rounds to fix every yaw; " +
+           std::to_string(p.rounds()) + " given";
+  if (sdp.status != sdp::Status::certified_unique)
+    return std::string("rotation SDP ") + sdp::to_string(sdp.status) + ": " + sdp.reason +
+           (sdp.status == sdp::Status::certified_not_unique ? " (too few rounds for the summed cost)" : "");
+  const double rounded = rounded_cost(C, yaw);
+  const double slack = 1e-6 * std::max({1.0, std::abs(sdp.objective), sdp.scale});
+  if (rounded - sdp.objective > slack) {
+    std::ostringstream s;
+    s << "the relaxation is not tight: rounded rotations cost " << rounded << " > SDP optimum " << sdp.objective
+      << " (its optimum is not a set of rotations, e.g. a reflected drone)";
+    return s.str();
+  }
+  return "";
+}
+
 }  // namespace
 
 Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp_options) {
@@ -94,7 +126,8 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
     out.reason = "no detections: the summed cost is zero";
     return out;
   }
-  const sdp::Result sdp = sdp::solve(complex ? sdp::complex_form(Q) : Q, 2, sdp_options);
+  const Eigen::MatrixXd C = complex ? sdp::complex_form(Q) : Q;
+  const sdp::Result sdp = sdp::solve(C, 2, sdp_options);
   out.timing_us.emplace_back("rotation", micros(t));
   out.certificate = certificate_of(sdp);
   if (sdp.Y.cols() < 2) {
@@ -103,11 +136,9 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
   }
   // Not unique or not certified: the rounded poses are still reported (as the paper does), but
   // no drone counts as resolved.
-  const bool unique = sdp.status == sdp::Status::certified_unique;
-  const std::string sdp_problem =
-      unique ? "" : std::string("rotation SDP ") + sdp::to_string(sdp.status) + ": " + sdp.reason +
-                        (sdp.status == sdp::Status::certified_not_unique ? " (too few rounds for the summed cost)" : "");
   const std::vector<double> yaw = yaws_from_sdp(sdp, p.reference);
+  const std::string sdp_problem = rotation_problem(p, sdp, C, yaw);
+  const bool unique = sdp_problem.empty();
   std::vector<Eigen::Matrix3d> R;
   for (double y : yaw) R.push_back(yaw_rotation(y));
   t = Clock::now();
@@ -142,7 +173,7 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
   if (std::string e = precision_problem(p, sigma); !e.empty()) {
     out.reason = e;
     for (int i = 0; i < p.drones(); ++i)
-      if (sigma[i].yaw > p.max_yaw_sigma || sigma[i].position > p.max_position_sigma) out.drones[i].resolved = false;
+      if (!precise(p, sigma[i])) out.drones[i].resolved = false;
     return out;
   }
   out.status = EstimateStatus::certified;

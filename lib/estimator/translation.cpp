@@ -103,6 +103,7 @@ std::vector<PoseSigma> pose_uncertainty(int drones, int reference, const std::ve
     dR[i](2, 2) = 0;
   }
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(4 * m, 4 * m);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(4 * m);  // gradient Σ Jᵀ W r
   for (const Correspondence& c : cs) {
     if (!connected[c.i] || !connected[c.j]) continue;
     const Eigen::Matrix3d W = information(c, R[c.i], R[c.j]);
@@ -113,22 +114,28 @@ std::vector<PoseSigma> pose_uncertainty(int drones, int reference, const std::ve
     J.col(4) = -dR[c.j] * c.x_j;
     J.block<3, 3>(0, 5) = -Eigen::Matrix3d::Identity();
     const Eigen::Matrix<double, 8, 8> h = J.transpose() * W * J;
+    const Eigen::Vector3d r = R[c.i] * c.x_i + t[c.i] - R[c.j] * c.x_j - t[c.j];
+    const Eigen::Matrix<double, 8, 1> gr = J.transpose() * (W * r);
     const int u[2] = {unknown[c.i], unknown[c.j]};
+    for (int x = 0; x < 2; ++x)
+      if (u[x] >= 0) g.segment<4>(4 * u[x]) += gr.segment<4>(4 * x);
     for (int x = 0; x < 2; ++x)
       for (int y = 0; y < 2; ++y)
         if (u[x] >= 0 && u[y] >= 0) H.block<4, 4>(4 * u[x], 4 * u[y]) += h.block<4, 4>(4 * x, 4 * y);
   }
-  (void)t;
   Eigen::LDLT<Eigen::MatrixXd> ldlt(H);
   const Eigen::MatrixXd C = ldlt.solve(Eigen::MatrixXd::Identity(4 * m, 4 * m));
+  const Eigen::VectorXd step = -(C * g);  // Gauss–Newton step to the least-squares poses
   for (int i = 0; i < drones; ++i) {
     if (unknown[i] < 0) continue;
     const int a = 4 * unknown[i];
     out[i].yaw = std::sqrt(std::max(0.0, C(a, a)));
     const Eigen::Matrix3d P = C.block<3, 3>(a + 1, a + 1);
     out[i].position = std::sqrt(std::max(0.0, P.selfadjointView<Eigen::Lower>().eigenvalues().maxCoeff()));
+    out[i].yaw_step = std::abs(step(a));
+    out[i].position_step = step.segment<3>(a + 1).norm();
     if (ldlt.info() != Eigen::Success || !std::isfinite(out[i].yaw) || !std::isfinite(out[i].position))
-      out[i] = PoseSigma{INFINITY, INFINITY};
+      out[i] = PoseSigma{INFINITY, INFINITY, INFINITY, INFINITY};
   }
   return out;
 }
