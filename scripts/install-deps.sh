@@ -7,6 +7,11 @@ packages=(
   libgtest-dev googletest                   # tests
   nlohmann-json3-dev libcli11-dev           # JSON files, command lines
   gnuplot-nox                               # benchmark plots (PNG)
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM: library, lcm-gen/lcm-spy/logger/logplayer, Java
+  default-jdk-headless libjchart2d-java     # the lcm-spy jar of our types; lcm-spy's charts
+  xvfb x11-apps                             # lcm-spy test under a virtual display (xwd screenshot)
+  libsodium-dev                             # gossip authentication (crypto_auth)
+  iproute2                                  # private network namespaces for udpm tests
   libsdpa-dev libsdp-dev coinor-csdp        # SDP peers, benchmark only (never linked into lib/ or apps/)
 )
 missing=()
