@@ -6,6 +6,7 @@
 // 1 the output could not be written, or an internal error.
 #include "fact/estimator.h"
 #include "fact/json_io.h"
+#include "common/estimator_flags.h"
 
 #include <CLI/CLI.hpp>
 
@@ -35,82 +36,31 @@ struct OutputError : std::runtime_error {
 struct Flags {
   std::string input = "-";
   std::string output = "-";
-  std::string mode = "auto";
-  int rounds = 0;
-  int reference = -1;
-  fact::NoiseModel noise;
+  fact::app::EstimatorFlags estimator;
 };
-
-void add_noise_flags(CLI::App& app, fact::NoiseModel& n) {
-  app.add_option("--noise-floor", n.floor, "Detector centring error at any range, sigma in m")
-      ->type_name("M")
-      ->capture_default_str();
-  app.add_option("--noise-linear", n.linear, "Range sigma per metre of range (m/m)")->type_name("M/M")->capture_default_str();
-  app.add_option("--noise-quadratic", n.quadratic, "Range sigma per square metre of range, stereo depth (1/m)")
-      ->type_name("1/M")
-      ->capture_default_str();
-  app.add_option("--noise-bearing", n.bearing, "Bearing sigma (rad)")->type_name("RAD")->capture_default_str();
-  app.add_option("--noise-odometry", n.odometry, "VIO position error within a session, sigma in m")
-      ->type_name("M")
-      ->capture_default_str();
-  app.add_option("--noise-odometry-yaw", n.odometry_yaw, "VIO yaw error within a session, sigma in rad")
-      ->type_name("RAD")
-      ->capture_default_str();
-  app.add_option("--gate", n.gate, "A residual within gate x sigma counts as consistent (sigmas, > 0)")
-      ->type_name("X")
-      ->capture_default_str();
-}
 
 void add_flags(CLI::App& app, Flags& f) {
   app.add_option("--input", f.input, "fact-rounds-v1 file to read; - for stdin")->type_name("FILE")->capture_default_str();
   app.add_option("--output", f.output, "File to write the fact-result-v1 JSON to; - for stdout")
       ->type_name("FILE")
       ->capture_default_str();
-  app.add_option("--mode", f.mode, "paper, complex, associated, or auto (the first that certifies)")
-      ->type_name("MODE")
-      ->capture_default_str();
-  app.add_option("--rounds", f.rounds, "Use only the first K rounds (0 = all)")->type_name("K")->capture_default_str();
-  app.add_option("--reference", f.reference, "Id of the reference drone (-1 = lowest id)")
-      ->type_name("ID")
-      ->capture_default_str();
-  add_noise_flags(app, f.noise);
+  fact::app::add_estimator_flags(app, f.estimator);
   app.footer(
-      "Noise model: sigma(d) = sqrt(floor^2 + (linear*d + quadratic*d^2)^2 + (bearing*d)^2) for a\n"
-      "detected centre at range d metres. Poses are the yaw (rad) and origin (m) of each drone's\n"
+      "Noise model, for a detected centre at range d metres: along the ray sigma^2 = floor^2 +\n"
+      "(linear*d + quadratic*d^2)^2 + odometry^2; across it sigma^2 = floor^2 + (bearing*d)^2 +\n"
+      "odometry^2 + (odometry_yaw*d)^2. Poses are the yaw (rad) and origin (m) of each drone's\n"
       "odometry frame in the reference drone's frame.\n"
       "Exit codes: 0 certified; 3 not certified (result written); 2 invalid input: bad flag,\n"
       "unreadable or malformed input, or an invalid_input result (result written); 1 output not\n"
       "written or internal error. One log line goes to stderr.");
 }
 
-void check_noise_flag(const char* flag, double value, bool positive) {
-  const bool ok = std::isfinite(value) && (positive ? value > 0 : value >= 0);
-  if (!ok) {
-    std::ostringstream s;
-    s << flag << ": expected a finite number " << (positive ? "> 0" : ">= 0") << ", got " << value;
-    throw InputError(s.str());
-  }
-}
-
 fact::EstimateOptions options_from(const Flags& f) {
-  fact::EstimateOptions o;
-  if (!fact::parse_mode(f.mode, &o.mode))
-    throw InputError("--mode: expected paper, complex, associated or auto, got \"" + f.mode + "\"");
-  if (f.rounds < 0)
-    throw InputError("--rounds: expected a number of rounds >= 0 (0 = all), got " + std::to_string(f.rounds));
-  if (f.reference < -1)
-    throw InputError("--reference: expected a drone id >= 0 (or -1 = lowest), got " + std::to_string(f.reference));
-  check_noise_flag("--noise-floor", f.noise.floor, false);
-  check_noise_flag("--noise-linear", f.noise.linear, false);
-  check_noise_flag("--noise-quadratic", f.noise.quadratic, false);
-  check_noise_flag("--noise-bearing", f.noise.bearing, false);
-  check_noise_flag("--noise-odometry", f.noise.odometry, false);
-  check_noise_flag("--noise-odometry-yaw", f.noise.odometry_yaw, false);
-  check_noise_flag("--gate", f.noise.gate, true);
-  o.max_rounds = f.rounds;
-  o.reference = f.reference;
-  o.noise = f.noise;
-  return o;
+  try {
+    return fact::app::estimator_options(f.estimator);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
 }
 
 // The whole stream; `what` names it in errors (a directory, an I/O error).

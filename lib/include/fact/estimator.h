@@ -32,9 +32,13 @@ enum class EstimateStatus {
 };
 const char* to_string(EstimateStatus s);  // "certified", "ambiguous", "invalid_input"
 
-// The sensor's noise, as a standard deviation of a detected centre's position in metres at
-// range d: σ(d) = sqrt(floor² + (linear·d + quadratic·d²)² + (bearing·d)²). It is a calibration
-// of the camera, not knowledge of the scene. Defaults: a D430-class depth camera.
+// The sensor's noise. A detected centre at range d has covariance σ_along² along the ray and
+// σ_across² across it (both axes), in the observer's frame:
+//   σ_along²  = floor² + (linear·d + quadratic·d²)² + odometry²
+//   σ_across² = floor² + (bearing·d)² + odometry² + (odometry_yaw·d)²
+// It is a calibration of the camera and the VIO, not knowledge of the scene. Defaults: a
+// D430-class depth camera with a VIO that drifts about 2 cm and 0.01 rad within a session.
+// sigma(d) is the isotropic summary sqrt(floor² + along_sensor² + across_sensor²).
 struct NoiseModel {
   double floor = 0.03;        // m, detector centring error at any range
   double linear = 0.0;        // range σ per metre of range (the paper's model: 0.05 per axis)
