@@ -1,0 +1,226 @@
+#include "common/app.h"
+
+#include "fact/app_status_t.hpp"
+
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <ctime>
+#include <iostream>
+#include <utility>
+
+namespace fact::app {
+
+int64_t now_us() {
+  using namespace std::chrono;
+  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+std::string channel(const std::string& base, int drone_id) {
+  if (drone_id < 0) return base;
+  return base + "_" + std::to_string(drone_id);
+}
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void on_stop_signal(int) { g_stop = 1; }
+}  // namespace
+
+void install_stop_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a blocking wait returns and the loop sees the flag
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+bool stop_requested() { return g_stop != 0; }
+void request_stop() { g_stop = 1; }
+void clear_stop() { g_stop = 0; }
+
+Log::Log(std::string app, int drone_id) : app_(std::move(app)), drone_id_(drone_id) {}
+
+void Log::event(const std::string& line) const {
+  int64_t t = now_us();
+  std::time_t secs = static_cast<std::time_t>(t / 1000000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char stamp[64];
+  std::snprintf(stamp, sizeof stamp, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+                static_cast<int>((t % 1000000) / 1000));
+  std::string out = std::string(stamp) + " " + app_ + "[" + std::to_string(drone_id_) + "] " + line + "\n";
+  std::fwrite(out.data(), 1, out.size(), stderr);  // one write per line: lines of apps sharing a terminal do not interleave
+  std::fflush(stderr);
+}
+
+Status::Status(lcm::LCM* lcm, std::string channel, std::string app, int drone_id)
+    : lcm_(lcm), channel_(std::move(channel)), app_(std::move(app)), drone_id_(drone_id) {}
+
+void Status::count(const std::string& name, int64_t n) {
+  auto it = values_.find(name);
+  if (it == values_.end()) {
+    names_.push_back(name);
+    values_.emplace(name, n);
+  } else {
+    it->second += n;
+  }
+}
+
+int64_t Status::value(const std::string& name) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? 0 : it->second;
+}
+
+void Status::set_state(const std::string& s) { state_ = s; }
+void Status::note(const std::string& message) { message_ = message; }
+void Status::set_period_us(int64_t period_us) { period_us_ = period_us > 0 ? period_us : 1; }
+
+void Status::tick(int64_t now) {
+  if (!ever_published_ || now - last_publish_ >= period_us_) publish(now);
+}
+
+void Status::publish(int64_t now) {
+  last_publish_ = now;
+  ever_published_ = true;
+  if (lcm_ == nullptr) return;
+  fact::app_status_t m;
+  m.utime = now;
+  m.drone_id = drone_id_;
+  m.app = app_;
+  m.state = state_;
+  m.num_counters = static_cast<int32_t>(names_.size());
+  for (const auto& name : names_) {
+    m.counter_names.push_back(name);
+    m.counter_values.push_back(values_.at(name));
+  }
+  m.message = message_;
+  if (lcm_->publish(channel_, &m) == 0) ++published_;
+}
+
+namespace detail {
+namespace {
+
+// A read-only cursor over an LCM encoding (big-endian), for the count checks below.
+class Wire {
+ public:
+  Wire(const void* data, int size) : p_(static_cast<const uint8_t*>(data)), size_(size) {}
+  bool skip(int64_t bytes) {
+    if (bytes < 0 || bytes > size_ - pos_) return false;
+    pos_ += static_cast<int>(bytes);
+    return true;
+  }
+  bool i32(int32_t* v) {
+    if (size_ - pos_ < 4) return false;
+    uint32_t u = 0;
+    for (int i = 0; i < 4; ++i) u = (u << 8) | p_[pos_ + i];
+    pos_ += 4;
+    *v = static_cast<int32_t>(u);
+    return true;
+  }
+  // An array count whose elements each take at least min_bytes: 0 ≤ count and the rest holds them.
+  bool count(int32_t* n, int64_t min_bytes) {
+    return i32(n) && *n >= 0 && static_cast<int64_t>(*n) * min_bytes <= size_ - pos_;
+  }
+  bool string() {  // int32 length including the terminating NUL, then the bytes
+    int32_t n = 0;
+    return i32(&n) && n >= 1 && skip(n);
+  }
+
+ private:
+  const uint8_t* p_;
+  int size_;
+  int pos_ = 0;
+};
+
+// round_packet_t without its fingerprint (as nested in swarm_rounds_t): utime, drone_id, round,
+// position[3], yaw, count, observations (each 7 doubles).
+constexpr int64_t kObservationBytes = 7 * 8;
+constexpr int64_t kRoundPacketMinBytes = 8 + 4 + 4 + 24 + 8 + 4;
+bool round_packet_body(Wire& w) {
+  int32_t n = 0;
+  return w.skip(8 + 4 + 4 + 24 + 8) && w.count(&n, kObservationBytes) && w.skip(n * kObservationBytes);
+}
+
+}  // namespace
+
+bool counts_fit(const fact::app_status_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;  // each counter: a string (≥ 5 bytes) and an int64
+  return w.skip(8 + 8 + 4) && w.string() && w.string() && w.count(&n, 5 + 8);
+}
+bool counts_fit(const fact::detections_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;  // detection_t: track_id, vector[3], box[4] (float), confidence (float)
+  return w.skip(8 + 8 + 4 + 8) && w.count(&n, 4 + 24 + 16 + 4);
+}
+bool counts_fit(const fact::frame_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t gray = 0, depth = 0;
+  return w.skip(8 + 8 + 4 + 8 + 4 + 4 + 4 * 8) && w.count(&gray, 1) && w.skip(gray) && w.count(&depth, 2);
+}
+bool counts_fit(const fact::gossip_packet_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;
+  return w.skip(8 + 8 + 4 + 8 + 1) && w.count(&n, 1);
+}
+bool counts_fit(const fact::gossip_request_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;
+  return w.skip(8 + 8 + 4 + 4) && w.count(&n, 4);
+}
+bool counts_fit(const fact::gossip_summary_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;  // origins, rounds_held (int32) and digests (int64)
+  return w.skip(8 + 8 + 4) && w.count(&n, 4 + 4 + 8);
+}
+bool counts_fit(const fact::round_packet_t*, const void* data, int size) {
+  Wire w(data, size);
+  return w.skip(8) && round_packet_body(w);
+}
+bool counts_fit(const fact::swarm_result_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;  // drone_pose_t: id, yaw, position[3], resolved (1 byte)
+  return w.skip(8 + 8 + 4) && w.string() && w.string() && w.string() && w.skip(4 + 4) &&
+         w.count(&n, 4 + 8 + 24 + 1);
+}
+bool counts_fit(const fact::swarm_rounds_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t drones = 0, packets = 0;
+  if (!(w.skip(8 + 8 + 4 + 4) && w.count(&drones, 4) && w.skip(drones * int64_t{4}) &&
+        w.count(&packets, kRoundPacketMinBytes)))
+    return false;
+  for (int32_t i = 0; i < packets; ++i)
+    if (!round_packet_body(w)) return false;
+  return true;
+}
+bool counts_fit(const fact::truth_t*, const void* data, int size) {
+  Wire w(data, size);
+  int32_t n = 0;  // per drone: id, frame_yaw, frame_origin[3], position[3], yaw
+  return w.skip(8 + 8) && w.count(&n, 4 + 8 + 24 + 24 + 8);
+}
+
+}  // namespace detail
+
+int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every) {
+  if (!lcm.good()) {
+    std::cerr << "LCM is not usable (bad --lcm-url, or no network for udpm)\n";
+    return 1;
+  }
+  if (period_ms < 1) period_ms = 1;
+  while (!stop_requested()) {
+    int r = lcm.handleTimeout(period_ms);
+    if (r < 0) {
+      if (stop_requested()) break;  // interrupted by the stop signal
+      if (errno == EINTR) continue;  // another signal (e.g. SIGCHLD): not an LCM failure
+      std::cerr << "LCM handleTimeout failed\n";
+      return 1;
+    }
+    if (every) every(now_us());
+  }
+  return 0;
+}
+
+}  // namespace fact::app

@@ -1,0 +1,157 @@
+// The shell every LCM app shares: time, channel names, logging, stop signals, the status
+// heartbeat with its counters, a decode that never throws, and the handleTimeout loop.
+// Apps are thin: lib/ does the work, these helpers do the plumbing the same way everywhere.
+#pragma once
+
+#include "fact/app_status_t.hpp"
+#include "fact/detections_t.hpp"
+#include "fact/frame_t.hpp"
+#include "fact/gossip_packet_t.hpp"
+#include "fact/gossip_request_t.hpp"
+#include "fact/gossip_summary_t.hpp"
+#include "fact/round_packet_t.hpp"
+#include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+#include "fact/truth_t.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstdint>
+#include <exception>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fact::app {
+
+// Wall-clock time in microseconds since the Unix epoch (the LCM utime convention).
+int64_t now_us();
+
+// Per-drone channel name: channel("FACT_ODOMETRY", 3) == "FACT_ODOMETRY_3".
+// A negative drone id means "not per drone" and returns base unchanged.
+std::string channel(const std::string& base, int drone_id);
+
+// SIGINT / SIGTERM set a flag instead of killing the process, so the app leaves its loop cleanly.
+void install_stop_handler();
+bool stop_requested();
+void request_stop();  // the same flag, set from code (a fatal condition, tests)
+void clear_stop();    // lowers the flag again (tests running several loops in one process)
+
+// One line per meaningful event on stderr: "2024-05-01T12:00:00.123Z fact-gossip[3] <line>".
+class Log {
+ public:
+  Log(std::string app, int drone_id);
+  void event(const std::string& line) const;
+  const std::string& app() const { return app_; }
+  int drone_id() const { return drone_id_; }
+
+ private:
+  std::string app_;
+  int drone_id_;
+};
+
+// Heartbeat and counters of one app: fact::app_status_t on `channel` (FACT_STATUS by default),
+// about once per period. Counters appear in the order they were first counted.
+class Status {
+ public:
+  // lcm may be null (nothing is published; the counters still count).
+  Status(lcm::LCM* lcm, std::string channel, std::string app, int drone_id);
+
+  void count(const std::string& name, int64_t n = 1);
+  int64_t value(const std::string& name) const;  // 0 for a counter never counted
+  void set_state(const std::string& s);          // e.g. "running", "waiting for peers"
+  void note(const std::string& message);         // the last notable event
+  void set_period_us(int64_t period_us);         // default 1 000 000 µs
+  int64_t period_us() const { return period_us_; }
+
+  void tick(int64_t now);     // publishes when ≥ period since the last publish (or never published)
+  void publish(int64_t now);  // publishes now
+  int64_t published() const { return published_; }  // messages published so far
+
+ private:
+  lcm::LCM* lcm_;
+  std::string channel_, app_;
+  int drone_id_;
+  std::string state_ = "starting", message_;
+  std::vector<std::string> names_;
+  std::map<std::string, int64_t> values_;
+  int64_t period_us_ = 1000000;
+  int64_t last_publish_ = 0;
+  bool ever_published_ = false;
+  int64_t published_ = 0;
+};
+
+namespace detail {
+// lcm-gen's decoders resize every variable-length array to the count read from the wire before
+// checking that the bytes hold it, so a crafted message with the right fingerprint and a count of
+// 2^31 − 1 would allocate gigabytes. These walk the wire format first and say whether every count
+// fits in the bytes that remain (each element needs at least its minimum encoded size). Types with
+// no variable-length arrays need no check (the template). Keep in step with lcmtypes/*.lcm: the
+// round-trip tests of every type (test/test_lcm_messages.cpp) fail if a walker goes stale.
+template <class T>
+bool counts_fit(const T*, const void*, int) { return true; }
+bool counts_fit(const fact::app_status_t*, const void* data, int size);
+bool counts_fit(const fact::detections_t*, const void* data, int size);
+bool counts_fit(const fact::frame_t*, const void* data, int size);
+bool counts_fit(const fact::gossip_packet_t*, const void* data, int size);
+bool counts_fit(const fact::gossip_request_t*, const void* data, int size);
+bool counts_fit(const fact::gossip_summary_t*, const void* data, int size);
+bool counts_fit(const fact::round_packet_t*, const void* data, int size);
+bool counts_fit(const fact::swarm_result_t*, const void* data, int size);
+bool counts_fit(const fact::swarm_rounds_t*, const void* data, int size);
+bool counts_fit(const fact::truth_t*, const void* data, int size);
+}  // namespace detail
+
+// Why a buffer does not decode as T ("" when it does): too short, a foreign fingerprint,
+// a count that the bytes cannot hold, truncated, trailing bytes, or the decoder throwing (a
+// negative count or string length). Never throws. On failure *msg is left in an unspecified state.
+template <class T>
+std::string decode_error(const void* data, int size, T* msg) {
+  if (data == nullptr || size < 8) return "too short (" + std::to_string(size) + " bytes)";
+  try {
+    uint64_t hash = 0;  // big-endian fingerprint, as lcm-gen writes it
+    for (int i = 0; i < 8; ++i) hash = (hash << 8) | static_cast<const uint8_t*>(data)[i];
+    if (hash != static_cast<uint64_t>(T::getHash()))
+      return "foreign fingerprint, not a " + std::string(T::getTypeName()) + " (" + std::to_string(size) + " bytes)";
+    if (!detail::counts_fit(msg, data, size))
+      return "an array count larger than the " + std::to_string(size) + " bytes can hold";
+    int n = msg->decode(data, 0, size);
+    if (n < 0) return "truncated or malformed (" + std::to_string(size) + " bytes)";
+    if (n != size)
+      return std::to_string(size - n) + " trailing bytes after a " + std::to_string(n) + "-byte message";
+    return "";
+  } catch (const std::exception& e) {
+    return std::string("decoder failed: ") + e.what() + " (" + std::to_string(size) + " bytes)";
+  } catch (...) {
+    return "decoder failed (" + std::to_string(size) + " bytes)";
+  }
+}
+
+// Decodes a received message; on failure (truncated, foreign fingerprint, garbage counts) counts
+// "undecodable" on status (when given), logs the channel, the byte count and the reason, and
+// returns false. Never throws. To keep a flood of garbage from flooding the log, with a status
+// only the first 10 failures and then every 100th are logged (each line gives the total so far).
+template <class T>
+bool decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, T* msg, Status* status,
+            const Log& log) {
+  std::string err = rbuf ? decode_error(rbuf->data, static_cast<int>(rbuf->data_size), msg)
+                         : std::string("no buffer");
+  if (err.empty()) return true;
+  int64_t total = 1;
+  if (status) {
+    status->count("undecodable");
+    total = status->value("undecodable");
+  }
+  if (total <= 10 || total % 100 == 0)
+    log.event("undecodable message on " + channel + " (" + std::to_string(rbuf ? rbuf->data_size : 0) +
+              " bytes, expected " + T::getTypeName() + "): " + err + "; " + std::to_string(total) +
+              " undecodable so far");
+  return false;
+}
+
+// Loops on lcm.handleTimeout(period_ms) until stop_requested(), calling every(now_us()) after each
+// wait (message or timeout). Returns 0, or 1 (after logging to stderr) if LCM fails.
+int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every);
+
+}  // namespace fact::app

@@ -1,0 +1,276 @@
+// fact-solver: the swarm's complete rounds in (fact::swarm_rounds_t on FACT_SWARM_ROUNDS_<id>, from
+// fact-gossip), the relative poses with their certificate out (fact::swarm_result_t on
+// FACT_RESULT_<id>), through the same fact::estimate_poses as the offline fact-solve.
+//
+// It estimates whenever complete_rounds grows beyond the last estimate (up to --rounds, when
+// given); repeats and older messages are counted ("stale") and ignored. Messages that arrive while an estimate runs are coalesced: only the
+// newest usable one is estimated next.
+//
+// Deterministic: the published message depends only on the input message and the flags. Its utime
+// is the input message's utime (not the clock) and solve_us is 0 unless --publish-solve-time, so
+// every drone given the same data, and every replay of a log, publishes the same bytes.
+//
+// Bad input (a truncated or foreign message, NaN, an unknown drone id, a duplicate packet, a round
+// count beyond --max-complete-rounds, a message from another drone's gossip) is counted and logged,
+// never fatal. Counters go out on FACT_STATUS (fact::app_status_t, about once a second).
+//
+// Exit codes: 0 stopped by SIGINT/SIGTERM; 1 LCM failed; 2 bad flags.
+#include "common/app.h"
+#include "common/convert.h"
+#include "common/estimator_flags.h"
+#include "fact/estimator.h"
+#include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace {
+
+constexpr const char* kApp = "fact-solver";
+
+// Every parameter of the app, with its unit.
+struct Options {
+  int drone_id = 0;                   // this drone's id (≥ 0)
+  std::string lcm_url;                // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL)
+  std::string rounds_channel;         // input; empty = FACT_SWARM_ROUNDS_<id>
+  std::string result_channel;         // output; empty = FACT_RESULT_<id>
+  std::string status_channel = "FACT_STATUS";
+  double status_period = 1.0;         // s between status messages (> 0)
+  int max_complete_rounds = 1000;     // a message claiming more complete rounds is rejected (bad input)
+  bool publish_solve_time = false;    // fill swarm_result_t.solve_us (breaks bit-identity across drones)
+  // Estimator options (mode, rounds, reference, noise model, certification limits), the same
+  // flags as fact-solve: common/estimator_flags.h.
+  fact::app::EstimatorFlags estimator;
+};
+
+struct FlagError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void add_flags(CLI::App& app, Options& o) {
+  app.add_option("--drone-id", o.drone_id, "This drone's id (>= 0); names the default channels")
+      ->type_name("ID")
+      ->capture_default_str();
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: LCM's default)")
+      ->type_name("URL");
+  app.add_option("--rounds-channel", o.rounds_channel, "Input channel (default FACT_SWARM_ROUNDS_<id>)")
+      ->type_name("CHANNEL");
+  app.add_option("--result-channel", o.result_channel, "Output channel (default FACT_RESULT_<id>)")->type_name("CHANNEL");
+  app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")
+      ->type_name("CHANNEL")
+      ->capture_default_str();
+  app.add_option("--status-period", o.status_period, "Seconds between status messages (> 0)")
+      ->type_name("S")
+      ->capture_default_str();
+  app.add_option("--max-complete-rounds", o.max_complete_rounds,
+                 "Reject a message claiming more complete rounds than this (>= 1)")
+      ->type_name("K")
+      ->capture_default_str();
+  app.add_flag("--publish-solve-time", o.publish_solve_time,
+               "Fill solve_us with the measured time (then drones' results differ in that field)");
+  fact::app::add_estimator_flags(app, o.estimator);
+  app.footer(
+      "Subscribes to the swarm's complete rounds (fact::swarm_rounds_t, from fact-gossip) and, each\n"
+      "time complete_rounds grows, publishes fact::swarm_result_t: the yaw (rad) and origin (m) of\n"
+      "every drone's odometry frame in the reference drone's frame, with the SDP certificate.\n"
+      "The result's utime is the input message's utime and solve_us is 0 (unless\n"
+      "--publish-solve-time), so the same data gives the same bytes on every drone and in replays.\n"
+      "Noise model: sigma(d) = sqrt(floor^2 + (linear*d + quadratic*d^2)^2 + (bearing*d)^2).\n"
+      "Counters (undecodable, invalid_input, stale, results_published, certified, ...) go out on\n"
+      "the status channel as fact::app_status_t. One log line per estimate on stderr.\n"
+      "Exit codes: 0 stopped by SIGINT/SIGTERM; 1 LCM failed; 2 bad flags.");
+}
+
+void check_positive(const char* flag, double value) {
+  if (std::isfinite(value) && value > 0) return;
+  std::ostringstream s;
+  s << flag << ": expected a finite number > 0, got " << value;
+  throw FlagError(s.str());
+}
+
+// Checks the flags and derives the estimator's options.
+fact::EstimateOptions check(Options& o) {
+  if (o.drone_id < 0) throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(o.drone_id));
+  if (o.rounds_channel.empty()) o.rounds_channel = fact::app::channel("FACT_SWARM_ROUNDS", o.drone_id);
+  if (o.result_channel.empty()) o.result_channel = fact::app::channel("FACT_RESULT", o.drone_id);
+  if (o.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
+  check_positive("--status-period", o.status_period);
+  if (o.max_complete_rounds < 1)
+    throw FlagError("--max-complete-rounds: expected >= 1, got " + std::to_string(o.max_complete_rounds));
+  try {
+    return fact::app::estimator_options(o.estimator);
+  } catch (const std::invalid_argument& e) {
+    throw FlagError(e.what());
+  }
+}
+
+// The usable input waiting for the next estimate.
+struct Pending {
+  int complete_rounds = 0;
+  int64_t utime = 0;
+  fact::Rounds rounds;
+};
+
+class Solver {
+ public:
+  Solver(lcm::LCM& lcm, const Options& o, const fact::EstimateOptions& e)
+      : lcm_(lcm),
+        options_(o),
+        estimate_options_(e),
+        log_(kApp, o.drone_id),
+        status_(&lcm, o.status_channel, kApp, o.drone_id) {
+    status_.set_period_us(static_cast<int64_t>(std::llround(o.status_period * 1e6)));
+    status_.set_state("waiting for rounds");
+    // Counters the status shows from the start, so a reader sees zeros rather than nothing.
+    for (const char* name : {"messages", "undecodable", "invalid_input", "stale", "estimates", "results_published",
+                             "certified", "ambiguous", "estimator_invalid_input"})
+      status_.count(name, 0);
+  }
+
+  void on_rounds(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    status_.count("messages");
+    fact::swarm_rounds_t msg;
+    if (!fact::app::decode(rbuf, channel, &msg, &status_, log_)) return;
+    if (msg.drone_id != options_.drone_id) {
+      reject("swarm_rounds from drone " + std::to_string(msg.drone_id) + " on " + channel + " (this is drone " +
+             std::to_string(options_.drone_id) + ")");
+      return;
+    }
+    if (msg.complete_rounds < 1 || msg.complete_rounds > options_.max_complete_rounds) {
+      reject("complete_rounds " + std::to_string(msg.complete_rounds) + " on " + channel + " outside [1, " +
+             std::to_string(options_.max_complete_rounds) + "]");
+      return;
+    }
+    const int newest = pending_ ? pending_->complete_rounds : estimated_rounds_;
+    if (usable(msg.complete_rounds) <= usable(newest)) {
+      status_.count("stale");  // a repeat, an older message, or rounds beyond --rounds: nothing new
+      return;
+    }
+    fact::Rounds rounds;
+    const std::string error = fact::app::rounds_from_message(msg, &rounds);
+    if (!error.empty()) {
+      reject("swarm_rounds on " + channel + ": " + error);
+      return;
+    }
+    pending_ = Pending{msg.complete_rounds, msg.utime, std::move(rounds)};
+  }
+
+  // Runs after every wait of the loop: takes every queued message, estimates the newest, publishes
+  // the status when due.
+  void every(int64_t now) {
+    while (lcm_.handleTimeout(0) > 0) {
+    }
+    if (pending_) {
+      Pending p = std::move(*pending_);
+      pending_.reset();
+      estimate(p);
+    }
+    status_.tick(now);
+  }
+
+  void final_status() {
+    status_.set_state("stopped");
+    status_.publish(fact::app::now_us());
+  }
+
+ private:
+  // How many of `complete_rounds` rounds the estimator uses (--rounds caps it).
+  int usable(int complete_rounds) const {
+    const int cap = estimate_options_.max_rounds;
+    return cap > 0 && complete_rounds > cap ? cap : complete_rounds;
+  }
+
+  void reject(const std::string& why) {
+    status_.count("invalid_input");
+    status_.note(why);
+    log_.event("rejected: " + why);
+  }
+
+  void estimate(const Pending& p) {
+    const auto start = std::chrono::steady_clock::now();
+    const fact::Estimate e = fact::estimate_poses(p.rounds, estimate_options_);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    fact::swarm_result_t result = fact::app::result_to_message(e, options_.drone_id, p.utime);
+    if (!options_.publish_solve_time) result.solve_us = 0;
+    estimated_rounds_ = p.complete_rounds;
+    status_.count("estimates");
+    status_.count(e.status == fact::EstimateStatus::certified   ? "certified"
+                  : e.status == fact::EstimateStatus::ambiguous ? "ambiguous"
+                                                                : "estimator_invalid_input");
+    const int published = lcm_.publish(options_.result_channel, &result);
+    if (published == 0)
+      status_.count("results_published");
+    else
+      status_.count("publish_failed");
+
+    std::ostringstream line;
+    line << "estimate: complete_rounds=" << p.complete_rounds << " rounds_used=" << e.rounds_used
+         << " N=" << p.rounds.drones.size() << " mode=" << fact::to_string(e.mode)
+         << " status=" << fact::to_string(e.status) << " time_ms=" << ms;
+    if (!e.certified()) line << " reason: " << e.reason;
+    if (published != 0) line << " (publish on " << options_.result_channel << " failed)";
+    log_.event(line.str());
+    std::ostringstream note;
+    note << "rounds " << p.complete_rounds << ": " << fact::to_string(e.status) << " (" << fact::to_string(e.mode)
+         << ") in " << ms << " ms";
+    status_.note(note.str());
+    status_.set_state(e.certified() ? "certified" : "not certified");
+    status_.publish(fact::app::now_us());  // a new result is worth a heartbeat at once
+  }
+
+  lcm::LCM& lcm_;
+  const Options options_;
+  const fact::EstimateOptions estimate_options_;
+  fact::app::Log log_;
+  fact::app::Status status_;
+  int estimated_rounds_ = 0;        // complete_rounds of the last estimate (0 = none yet)
+  std::optional<Pending> pending_;  // the newest usable input not yet estimated
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"Estimates the swarm's relative poses from the complete rounds fact-gossip publishes and\n"
+               "publishes them with their certificate (LCM).",
+               kApp};
+  add_flags(app, options);
+  app.get_formatter()->column_width(34);
+  fact::EstimateOptions estimate_options;
+  try {
+    app.parse(argc, argv);
+    estimate_options = check(options);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  } catch (const FlagError& e) {
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+
+  const fact::app::Log log(kApp, options.drone_id);
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) {
+    log.event("error: cannot open LCM" + (options.lcm_url.empty() ? std::string() : " at " + options.lcm_url));
+    return 1;
+  }
+  fact::app::install_stop_handler();
+  Solver solver(lcm, options, estimate_options);
+  lcm.subscribe(options.rounds_channel, &Solver::on_rounds, &solver);
+  log.event("listening on " + options.rounds_channel + ", publishing on " + options.result_channel + " (mode " +
+            options.estimator.mode + ")");
+  const int code = fact::app::run_loop(lcm, 100, [&](int64_t now) { solver.every(now); });
+  solver.final_status();
+  log.event(code == 0 ? "stopped" : "stopped: LCM failed");
+  return code;
+}

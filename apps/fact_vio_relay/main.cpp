@@ -1,0 +1,499 @@
+// fact-vio-relay: one drone's VIO odometry from one source in, one normalised fact::odometry_t
+// stream out on FACT_ODOMETRY_<id>, through fact::OdometryFilter (lib/odometry_filter).
+//
+// Sources:
+//   lcm  fact::odometry_t as the simulator publishes it (raw) on FACT_VIO_RAW_<id>; its velocity is
+//        kept, a message with another drone_id is counted (wrong_drone_id) and dropped.
+//   tum  a TUM trajectory file ("t tx ty tz qx qy qz qw" per line), replayed at real time × --rate
+//        (0 = as fast as possible); the app exits 0 at the end of the file.
+//   udp  one pose line per UDP datagram, in the same format, on --bind:--port.
+// Pose lines: t in seconds, position in metres in f_i, the body's attitude as a Hamilton unit
+// quaternion, world-from-body, FLU; yaw/pitch/roll are its Z-Y-X Euler angles (yaw = heading of the
+// body x axis); velocity is the backward difference of consecutive published positions.
+//
+// Every sample is checked (non-finite fields, time not strictly increasing, position or yaw jumps
+// faster than --max-speed / --max-yaw-rate, unusable quaternions, malformed lines); a rejected one
+// is counted (status counters rejected_<reason>) and logged, at most one line per reason per second.
+//
+// Exit codes: 0 end of the TUM file, or stopped by SIGINT/SIGTERM; 1 LCM, the socket or the file
+// failed while running; 2 bad flags or an unreadable --file.
+#include "common/app.h"
+#include "fact/odometry_filter.h"
+#include "fact/odometry_t.hpp"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+constexpr const char* kApp = "fact-vio-relay";
+constexpr int kInputQueue = 1000;  // lcm source: messages LCM may hold for the input subscription
+
+// Every parameter of the app, with its unit.
+struct Options {
+  int drone_id = 0;                     // this drone's id (≥ 0)
+  std::string source = "lcm";           // lcm | tum | udp
+  std::string lcm_url;                  // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL)
+  std::string input_channel;            // lcm source; empty = FACT_VIO_RAW_<id>
+  std::string output_channel;           // empty = FACT_ODOMETRY_<id>
+  std::string status_channel = "FACT_STATUS";
+  double status_period = 1.0;           // s between status messages (> 0)
+  std::string file;                     // tum source: the trajectory file
+  double rate = 1.0;                    // tum source: replay speed, × real time; 0 = as fast as possible
+  int port = 0;                         // udp source: port to listen on (1 … 65535)
+  std::string bind = "127.0.0.1";       // udp source: IPv4 address to listen on
+  bool restamp = false;                 // tum/udp: shift sample times so the first is "now" (µs)
+  fact::OdometryFilterOptions filter;   // max_speed (m/s), max_yaw_rate (rad/s)
+};
+
+struct FlagError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void add_flags(CLI::App& app, Options& o) {
+  app.add_option("--drone-id", o.drone_id, "This drone's id (>= 0); names the default channels")
+      ->type_name("ID")
+      ->capture_default_str();
+  app.add_option("--source", o.source, "Where odometry comes from: lcm, tum or udp")
+      ->type_name("SOURCE")
+      ->capture_default_str();
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: LCM's default)")
+      ->type_name("URL");
+  app.add_option("--input-channel", o.input_channel, "lcm source: raw odometry channel (default FACT_VIO_RAW_<id>)")
+      ->type_name("CHANNEL");
+  app.add_option("--output-channel", o.output_channel, "Output channel (default FACT_ODOMETRY_<id>)")
+      ->type_name("CHANNEL");
+  app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")
+      ->type_name("CHANNEL")
+      ->capture_default_str();
+  app.add_option("--status-period", o.status_period, "Seconds between status messages (> 0)")
+      ->type_name("S")
+      ->capture_default_str();
+  app.add_option("--file", o.file, "tum source: the TUM trajectory file to replay")->type_name("FILE");
+  app.add_option("--rate", o.rate, "tum source: replay speed, x real time (0 = as fast as possible)")
+      ->type_name("X")
+      ->capture_default_str();
+  app.add_option("--port", o.port, "udp source: UDP port to listen on (1-65535)")->type_name("PORT");
+  app.add_option("--bind", o.bind, "udp source: IPv4 address to listen on")->type_name("ADDR")->capture_default_str();
+  app.add_flag("--restamp", o.restamp, "tum/udp sources: shift sample times so the first is the wall clock");
+  app.add_option("--max-speed", o.filter.max_speed, "Reject a position change faster than this (m/s, > 0)")
+      ->type_name("M/S")
+      ->capture_default_str();
+  app.add_option("--max-yaw-rate", o.filter.max_yaw_rate, "Reject a yaw change faster than this (rad/s, > 0)")
+      ->type_name("RAD/S")
+      ->capture_default_str();
+  app.footer(
+      "Publishes fact::odometry_t (position m, velocity m/s, unwrapped yaw, roll, pitch rad, in the\n"
+      "drone's odometry frame f_i: gravity-aligned FLU) with seq +1 per published sample.\n"
+      "Pose lines (tum file lines, one per udp datagram; '#' comments and blank lines skipped):\n"
+      "  t tx ty tz qx qy qz qw\n"
+      "t in seconds, position in metres, the body's attitude as a Hamilton unit quaternion,\n"
+      "world-from-body, body axes FLU; yaw = heading of the body x axis (Z-Y-X Euler angles).\n"
+      "Velocity: the source's (lcm), else the difference of consecutive published positions.\n"
+      "--restamp adds one offset to every time (the first sample's arrival minus its own time).\n"
+      "Rejected, counted and logged (at most one line per reason per second): NaN/inf fields\n"
+      "(rejected_nan), time not strictly increasing (rejected_out_of_order), position or yaw jumps\n"
+      "faster than --max-speed/--max-yaw-rate since the last published sample (rejected_jump),\n"
+      "unusable quaternions (rejected_attitude), malformed lines (rejected_malformed), times beyond\n"
+      "int64 us (rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id).\n"
+      "Counters go out on the status channel as fact::app_status_t.\n"
+      "--rate 0 publishes as fast as LCM goes: a subscriber keeps every sample only with a queue\n"
+      "capacity above LCM's default of 30 messages per subscription.\n"
+      "Exit codes: 0 end of the tum file, or SIGINT/SIGTERM; 1 LCM, socket or file failure;\n"
+      "2 bad flags or unreadable --file.");
+}
+
+void check_positive(const char* flag, double value) {
+  if (std::isfinite(value) && value > 0) return;
+  std::ostringstream s;
+  s << flag << ": expected a finite number > 0, got " << value;
+  throw FlagError(s.str());
+}
+
+void only_for(const CLI::App& app, const char* flag, const std::string& source, const Options& o) {
+  if (app.count(flag) > 0 && o.source != source)
+    throw FlagError(std::string(flag) + " is only for --source " + source + " (the source is " + o.source + ")");
+}
+
+void check(const CLI::App& app, Options& o) {
+  if (o.drone_id < 0) throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(o.drone_id));
+  if (o.source != "lcm" && o.source != "tum" && o.source != "udp")
+    throw FlagError("--source: expected lcm, tum or udp, got \"" + o.source + "\"");
+  only_for(app, "--input-channel", "lcm", o);
+  only_for(app, "--file", "tum", o);
+  only_for(app, "--rate", "tum", o);
+  only_for(app, "--port", "udp", o);
+  only_for(app, "--bind", "udp", o);
+  if (o.restamp && o.source == "lcm") throw FlagError("--restamp is only for --source tum or udp");
+  if (o.input_channel.empty()) o.input_channel = fact::app::channel("FACT_VIO_RAW", o.drone_id);
+  if (o.output_channel.empty()) o.output_channel = fact::app::channel("FACT_ODOMETRY", o.drone_id);
+  if (o.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
+  if (o.source == "lcm" && o.input_channel == o.output_channel)
+    throw FlagError("--input-channel and --output-channel are both " + o.output_channel + " (the relay would feed itself)");
+  if (o.output_channel == o.status_channel)
+    throw FlagError("--output-channel and --status-channel are both " + o.output_channel);
+  check_positive("--status-period", o.status_period);
+  check_positive("--max-speed", o.filter.max_speed);
+  check_positive("--max-yaw-rate", o.filter.max_yaw_rate);
+  if (o.source == "tum") {
+    if (o.file.empty()) throw FlagError("--source tum needs --file FILE");
+    if (!(std::isfinite(o.rate) && o.rate >= 0))
+      throw FlagError("--rate: expected a finite number >= 0 (0 = as fast as possible), got " + std::to_string(o.rate));
+  }
+  if (o.source == "udp") {
+    if (o.port < 1 || o.port > 65535) throw FlagError("--source udp needs --port in 1-65535, got " + std::to_string(o.port));
+    in_addr a{};
+    if (inet_pton(AF_INET, o.bind.c_str(), &a) != 1)
+      throw FlagError("--bind: expected an IPv4 address such as 127.0.0.1, got \"" + o.bind + "\"");
+  }
+}
+
+// The relay: source samples → filter → fact::odometry_t, with counters and rate-limited logging.
+class Relay {
+ public:
+  Relay(lcm::LCM& lcm, const Options& options)
+      : lcm_(lcm),
+        options_(options),
+        log_(kApp, options.drone_id),
+        status_(&lcm, options.status_channel, kApp, options.drone_id),
+        filter_(options.filter) {
+    status_.set_period_us(static_cast<int64_t>(std::llround(options.status_period * 1e6)));
+    // Every counter from the start, so that a reader sees zeros rather than missing names.
+    status_.count("published", 0);
+    for (fact::Rejection r : {fact::Rejection::non_finite, fact::Rejection::out_of_order, fact::Rejection::jump,
+                              fact::Rejection::bad_attitude, fact::Rejection::malformed, fact::Rejection::bad_time})
+      status_.count(fact::counter_name(r), 0);
+    if (options.source == "lcm") {
+      status_.count("undecodable", 0);
+      status_.count("wrong_drone_id", 0);
+    }
+    status_.count("publish_failed", 0);
+  }
+
+  const fact::app::Log& log() const { return log_; }
+  fact::app::Status& status() { return status_; }
+
+  // lcm source.
+  void on_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    fact::odometry_t m;
+    const int64_t now = fact::app::now_us();
+    const std::string error = fact::app::decode_error(rbuf->data, static_cast<int>(rbuf->data_size), &m);
+    if (!error.empty()) {  // as fact::app::decode, but the log line rate-limited like every rejection
+      status_.count("undecodable");
+      limited("undecodable", now,
+              "undecodable message on " + channel + " (" + std::to_string(rbuf->data_size) + " bytes, expected " +
+                  fact::odometry_t::getTypeName() + "): " + error);
+      return;
+    }
+    if (m.drone_id != options_.drone_id) {
+      status_.count("wrong_drone_id");
+      limited("wrong_drone_id", now, "dropped a message on " + channel + " from drone " + std::to_string(m.drone_id));
+      return;
+    }
+    fact::OdometryInput in;
+    in.utime = static_cast<double>(m.utime);
+    in.position = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
+    in.yaw = m.yaw;
+    in.roll = m.roll;
+    in.pitch = m.pitch;
+    in.has_velocity = true;
+    in.velocity = Eigen::Vector3d(m.velocity[0], m.velocity[1], m.velocity[2]);
+    handle(filter_.push(in), now, "message seq " + std::to_string(m.seq));
+  }
+
+  // tum and udp sources: one pose line; `where` names it in log lines ("line 12", "datagram …").
+  void on_line(const std::string& text, const std::string& where) {
+    const int64_t now = fact::app::now_us();
+    fact::PoseLine line;
+    std::string error;
+    switch (fact::parse_pose_line(text, &line, &error)) {
+      case fact::PoseLineKind::empty: return;
+      case fact::PoseLineKind::malformed: malformed(where, error); return;
+      case fact::PoseLineKind::sample: break;
+    }
+    if (options_.restamp && !has_offset_ && std::isfinite(line.time) && std::abs(line.time) < 9e12) {
+      offset_us_ = static_cast<double>(now - std::llround(line.time * 1e6));  // whole µs: intervals kept exactly
+      has_offset_ = true;
+    }
+    handle(filter_.push(line, offset_us_), now, where);
+  }
+
+  // Input that is not a pose line (a malformed line, an oversized datagram).
+  void malformed(const std::string& where, const std::string& detail) {
+    const std::string name = fact::counter_name(fact::Rejection::malformed);
+    status_.count(name);
+    limited(name, fact::app::now_us(), where + ": " + name + ": " + detail);
+  }
+
+  void every(int64_t now) { status_.tick(now); }
+
+  void final_status(const std::string& state) {
+    status_.set_state(state);
+    status_.publish(fact::app::now_us());
+  }
+
+  std::string summary() const {
+    std::ostringstream s;
+    s << "published " << status_.value("published");
+    for (const char* name : {"rejected_nan", "rejected_out_of_order", "rejected_jump", "rejected_attitude",
+                             "rejected_malformed", "rejected_time", "undecodable", "wrong_drone_id"})
+      if (status_.value(name) > 0) s << ", " << name << " " << status_.value(name);
+    return s.str();
+  }
+
+ private:
+  void handle(const fact::FilterResult& r, int64_t now, const std::string& where) {
+    if (r.empty) return;
+    if (!r.accepted()) {
+      const std::string name = fact::counter_name(r.rejection);
+      status_.count(name);
+      limited(name, now, where + ": " + name + ": " + r.detail);
+      return;
+    }
+    fact::odometry_t m;
+    m.utime = r.output.utime;
+    m.drone_id = options_.drone_id;
+    m.seq = r.output.seq;
+    for (int k = 0; k < 3; ++k) {
+      m.position[k] = r.output.position[k];
+      m.velocity[k] = r.output.velocity[k];
+    }
+    m.yaw = r.output.yaw;
+    m.roll = r.output.roll;
+    m.pitch = r.output.pitch;
+    if (lcm_.publish(options_.output_channel, &m) != 0) {
+      status_.count("publish_failed");
+      limited("publish_failed", now, "publish on " + options_.output_channel + " failed");
+      return;
+    }
+    status_.count("published");
+    if (r.output.seq == 0) {
+      std::ostringstream s;
+      s << "first sample published on " << options_.output_channel << ": utime " << m.utime << " us, position ("
+        << m.position[0] << ", " << m.position[1] << ", " << m.position[2] << ") m, yaw " << m.yaw << " rad";
+      log_.event(s.str());
+      status_.set_state("relaying");
+    }
+  }
+
+  // A log line for `key` at most once per second; the status message keeps the last one.
+  void limited(const std::string& key, int64_t now, const std::string& line) {
+    status_.note(line);
+    int64_t held = 0;
+    if (!limiter_.allow(key, now, &held)) return;
+    log_.event(held > 0 ? line + " (" + std::to_string(held) + " more " + key + " since the last such line)" : line);
+  }
+
+  lcm::LCM& lcm_;
+  const Options& options_;
+  fact::app::Log log_;
+  fact::app::Status status_;
+  fact::OdometryFilter filter_;
+  fact::LogLimiter limiter_{1000000};
+  bool has_offset_ = false;  // --restamp: offset found (at the first sample with a usable time)
+  double offset_us_ = 0;     // µs added to every sample's time (0 without --restamp)
+};
+
+// Sleeps until `target` (steady clock, immune to wall-clock steps) or a stop, keeping the heartbeat going.
+void wait_until(std::chrono::steady_clock::time_point target, Relay& relay) {
+  while (!fact::app::stop_requested()) {
+    const auto left = target - std::chrono::steady_clock::now();
+    if (left <= std::chrono::steady_clock::duration::zero()) return;
+    relay.every(fact::app::now_us());
+    std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(left, std::chrono::milliseconds(100)));
+  }
+}
+
+int run_tum(std::ifstream& file, const Options& o, Relay& relay) {
+  relay.status().set_state("replaying " + o.file);
+  relay.status().publish(fact::app::now_us());
+  const auto start = std::chrono::steady_clock::now();
+  bool has_first = false;
+  double first_time = 0;  // s, the first finite sample time in the file
+  std::string text;
+  int64_t line_no = 0;
+  while (!fact::app::stop_requested() && std::getline(file, text)) {
+    ++line_no;
+    if (o.rate > 0) {
+      fact::PoseLine line;
+      std::string error;
+      if (fact::parse_pose_line(text, &line, &error) == fact::PoseLineKind::sample && std::isfinite(line.time)) {
+        if (!has_first) {
+          has_first = true;
+          first_time = line.time;
+        }
+        // A sample before the first, or beyond ~100 years of replay, is not waited for.
+        const double offset_s = (line.time - first_time) / o.rate;
+        if (offset_s > 0 && offset_s < 3e9)
+          wait_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                 std::chrono::duration<double>(offset_s)),
+                     relay);
+        if (fact::app::stop_requested()) break;
+      }
+    }
+    relay.on_line(text, o.file + " line " + std::to_string(line_no));
+    relay.every(fact::app::now_us());
+  }
+  if (file.bad()) {
+    relay.log().event("error: reading " + o.file + " failed after line " + std::to_string(line_no));
+    relay.final_status("read failed");
+    return 1;
+  }
+  const bool stopped = fact::app::stop_requested();
+  relay.log().event(std::string(stopped ? "stopped" : "end of file") + " after " + std::to_string(line_no) +
+                    " lines: " + relay.summary());
+  relay.final_status(stopped ? "stopped" : "finished");
+  return 0;
+}
+
+int run_udp(int sock, const Options& o, Relay& relay) {
+  relay.status().set_state("listening on udp " + o.bind + ":" + std::to_string(o.port));
+  relay.status().publish(fact::app::now_us());
+  std::vector<char> buffer(65536);
+  int64_t datagrams = 0;
+  bool logged_sender = false;
+  while (!fact::app::stop_requested()) {
+    pollfd p{sock, POLLIN, 0};
+    const int ready = poll(&p, 1, 100);
+    if (ready < 0) {
+      if (errno == EINTR) continue;
+      relay.log().event(std::string("error: poll on the udp socket failed: ") + std::strerror(errno));
+      relay.final_status("socket failed");
+      return 1;
+    }
+    if (ready > 0) {
+      sockaddr_in from{};
+      socklen_t from_len = sizeof from;
+      const ssize_t n = recvfrom(sock, buffer.data(), buffer.size(), MSG_TRUNC, reinterpret_cast<sockaddr*>(&from), &from_len);
+      if (n < 0) {
+        if (errno == EINTR || errno == EAGAIN) continue;
+        relay.log().event(std::string("error: recvfrom failed: ") + std::strerror(errno));
+        relay.final_status("socket failed");
+        return 1;
+      }
+      ++datagrams;
+      char addr[INET_ADDRSTRLEN] = "?";
+      inet_ntop(AF_INET, &from.sin_addr, addr, sizeof addr);
+      const std::string sender = std::string(addr) + ":" + std::to_string(ntohs(from.sin_port));
+      if (!logged_sender) {
+        relay.log().event("first datagram from " + sender);
+        logged_sender = true;
+      }
+      const std::string where = "datagram " + std::to_string(datagrams) + " from " + sender;
+      if (static_cast<size_t>(n) > buffer.size())  // truncated: never a pose line
+        relay.malformed(where, "datagram of " + std::to_string(n) + " bytes is too long for a pose line");
+      else
+        relay.on_line(std::string(buffer.data(), static_cast<size_t>(n)), where);
+    }
+    relay.every(fact::app::now_us());
+  }
+  relay.log().event("stopped after " + std::to_string(datagrams) + " datagrams: " + relay.summary());
+  relay.final_status("stopped");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"Relays one drone's VIO odometry from the simulator (LCM), a TUM trajectory file or a UDP\n"
+               "line stream as one normalised fact::odometry_t stream on FACT_ODOMETRY_<id> (LCM).",
+               kApp};
+  add_flags(app, options);
+  app.get_formatter()->column_width(34);
+  try {
+    app.parse(argc, argv);
+    check(app, options);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  } catch (const FlagError& e) {
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+
+  const fact::app::Log log(kApp, options.drone_id);
+  // The source first: a file that cannot be read is bad input (2), before any LCM traffic.
+  std::ifstream file;
+  if (options.source == "tum") {
+    std::error_code ec;
+    if (std::filesystem::is_directory(options.file, ec)) {
+      std::cerr << kApp << ": error: --file " << options.file << ": is a directory\n";
+      return 2;
+    }
+    file.open(options.file);
+    if (!file) {
+      std::cerr << kApp << ": error: --file " << options.file << ": cannot open: " << std::strerror(errno) << "\n";
+      return 2;
+    }
+  }
+  int sock = -1;
+  if (options.source == "udp") {
+    sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<uint16_t>(options.port));
+    inet_pton(AF_INET, options.bind.c_str(), &addr.sin_addr);
+    if (sock < 0 || bind(sock, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      log.event("error: cannot listen on udp " + options.bind + ":" + std::to_string(options.port) + ": " +
+                std::strerror(errno));
+      if (sock >= 0) close(sock);
+      return 1;
+    }
+  }
+
+  lcm::LCM lcm(options.lcm_url);
+  if (!lcm.good()) {
+    log.event("error: cannot open LCM" + (options.lcm_url.empty() ? std::string() : " at " + options.lcm_url));
+    if (sock >= 0) close(sock);
+    return 1;
+  }
+  fact::app::install_stop_handler();
+  Relay relay(lcm, options);
+  std::ostringstream start;
+  start << "source " << options.source;
+  if (options.source == "lcm") start << " " << options.input_channel;
+  if (options.source == "tum") start << " " << options.file << " at rate " << options.rate;
+  if (options.source == "udp") start << " " << options.bind << ":" << options.port;
+  start << ", publishing on " << options.output_channel << " (max speed " << options.filter.max_speed
+        << " m/s, max yaw rate " << options.filter.max_yaw_rate << " rad/s" << (options.restamp ? ", restamped" : "")
+        << ")";
+  log.event(start.str());
+
+  int code = 0;
+  if (options.source == "lcm") {
+    // Room for bursts: LCM drops (silently, uncounted) what exceeds a subscription's queue.
+    lcm.subscribe(options.input_channel, &Relay::on_raw, &relay)->setQueueCapacity(kInputQueue);
+    relay.status().set_state("listening on " + options.input_channel);
+    relay.status().publish(fact::app::now_us());
+    code = fact::app::run_loop(lcm, 100, [&](int64_t now) { relay.every(now); });
+    log.event(std::string(code == 0 ? "stopped: " : "stopped (LCM failed): ") + relay.summary());
+    relay.final_status(code == 0 ? "stopped" : "LCM failed");
+  } else if (options.source == "tum") {
+    code = run_tum(file, options, relay);
+  } else {
+    code = run_udp(sock, options, relay);
+    close(sock);
+  }
+  return code;
+}

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs a command inside a fresh private network namespace, so that LCM's udpm:// multicast never
+# leaves this machine (and never meets other runs' traffic):
+#   scripts/netns-run.sh CMD [ARGS...]
+# The namespace has only the loopback interface, brought up, with the multicast route
+# 224.0.0.0/4 on lo. The command's exit code is passed through; the namespace disappears with it.
+# Needs root (or CAP_SYS_ADMIN) and util-linux unshare + iproute2 ip. Fails (exit 125) with the
+# reason when they are missing.
+set -euo pipefail
+if [ "$#" -eq 0 ]; then
+  echo "usage: $0 CMD [ARGS...]   (runs CMD in a private network namespace with lo up and 224.0.0.0/4 on lo)" >&2
+  exit 125
+fi
+for tool in unshare ip; do
+  command -v "$tool" >/dev/null 2>&1 || { echo "netns-run: '$tool' not found (install util-linux / iproute2)" >&2; exit 125; }
+done
+if [ "$(id -u)" -ne 0 ]; then
+  echo "netns-run: needs root to create a network namespace (run with sudo)" >&2
+  exit 125
+fi
+unshare --net -- true 2>/dev/null || {
+  echo "netns-run: 'unshare --net' is not permitted here (a container without CAP_SYS_ADMIN?)" >&2
+  exit 125
+}
+# Inside: set up lo and the route; any failure there is reported as 125, then exec the command
+# (so its exit code and signals are its own).
+exec unshare --net -- sh -c '
+  ip link set lo up || { echo "netns-run: cannot bring lo up in the new namespace" >&2; exit 125; }
+  ip route add 224.0.0.0/4 dev lo || { echo "netns-run: cannot add the multicast route on lo" >&2; exit 125; }
+  exec "$@"
+' netns-run "$@"

@@ -1,0 +1,425 @@
+// Multi-process gossip test: 6 real fact-gossip processes, each behind its own fact-fault-relay
+// (20% loss, 10% duplication, 20% reordering towards the drone, seeded), over udpm:// inside ONE
+// private network namespace. ctest runs this binary through scripts/netns-run.sh; run by hand
+// it refuses to start unless the only network interface is lo (it never multicasts on a real
+// network). Layout:
+//   drone i's fact-gossip ── udpm://239.255.76.67:(7700+i) ── fact-fault-relay i ──┐
+//                                                                                  ├─ udpm://239.255.76.67:7667 (swarm)
+//   a 7th fact-gossip (id 9) with a WRONG swarm key, directly on the swarm URL ────┘
+// Round packets are injected on FACT_ROUND_PACKET_<id> (--rounds-from-channel). Scenario: rounds
+// 0–1 of every drone → all complete; drone 2's gossip is killed (SIGKILL) and restarted empty →
+// it recovers everything, its own rounds included, from its peers; rounds 2–3 → all complete.
+// Checks: every drone's final swarm_rounds_t is byte-identical (apart from utime and the
+// publisher's id) and equal to the injected packets; the wrong-key sender's packets are counted
+// as auth_failed and it never becomes a member; the relays really dropped, duplicated and
+// delayed; every process exits 0 on SIGTERM.
+#include "common/convert.h"
+#include "fact/app_status_t.hpp"
+#include "fact/detections_t.hpp"
+#include "fact/gossip.h"
+#include "fact/odometry_t.hpp"
+#include "fact/round_packet_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+#include "fact_gossip/wire.h"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+constexpr int kDrones = 6;
+constexpr int kWrongKeyId = 9;
+const std::string kSwarmUrl = "udpm://239.255.76.67:7667?ttl=0";
+std::string drone_url(int i) { return "udpm://239.255.76.67:" + std::to_string(7700 + i) + "?ttl=0"; }
+
+// The interfaces of this process's network namespace (/proc/self/net/dev); only "lo" means we
+// are inside a private one (scripts/netns-run.sh).
+std::string network_interfaces() {
+  std::ifstream f("/proc/self/net/dev");
+  std::string line, names;
+  for (int n = 0; std::getline(f, line); ++n) {
+    const auto colon = line.find(':');
+    if (n < 2 || colon == std::string::npos) continue;  // two header lines
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(' '));
+    names += (names.empty() ? "" : ",") + name;
+  }
+  return names;
+}
+
+int64_t now_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+class Processes {
+ public:
+  ~Processes() {
+    for (auto& [name, pid] : pids_) kill(pid, SIGKILL);
+    for (auto& [name, pid] : pids_) waitpid(pid, nullptr, 0);
+  }
+  void start(const std::string& name, const std::vector<std::string>& args, const std::string& log) {
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    const int r = posix_spawn(&pid, args[0].c_str(), &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    ASSERT_EQ(r, 0) << "cannot start " << args[0];
+    pids_[name] = pid;
+  }
+  void kill_now(const std::string& name) {
+    kill(pids_.at(name), SIGKILL);
+    waitpid(pids_.at(name), nullptr, 0);
+    pids_.erase(name);
+  }
+  // SIGTERM everything; the exit code of each (or -1 when it did not exit normally).
+  std::map<std::string, int> stop_all() {
+    std::map<std::string, int> codes;
+    for (auto& [name, pid] : pids_) kill(pid, SIGTERM);
+    for (auto& [name, pid] : pids_) {
+      int status = 0;
+      waitpid(pid, &status, 0);
+      codes[name] = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    pids_.clear();
+    return codes;
+  }
+
+ private:
+  std::map<std::string, pid_t> pids_;
+};
+
+// Listens on every drone URL and the swarm URL: swarm_rounds_t per drone, status per (app, id).
+class Observer {
+ public:
+  struct Sink {
+    Observer* o;
+    void swarm_rounds(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fact::swarm_rounds_t m;
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) == static_cast<int>(rbuf->data_size))
+        o->latest_rounds[m.drone_id] = m;
+    }
+    void status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fact::app_status_t m;
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) != static_cast<int>(rbuf->data_size)) return;
+      auto& c = o->counters[{m.app, m.drone_id}];
+      for (int k = 0; k < m.num_counters; ++k) c[m.counter_names[k]] = m.counter_values[k];
+      o->states[{m.app, m.drone_id}] = m.state;
+    }
+  };
+
+  explicit Observer(std::vector<std::string> urls) {
+    for (const auto& u : urls) {
+      auto l = std::make_unique<lcm::LCM>(u);
+      good = good && l->good();
+      l->subscribe("FACT_SWARM_ROUNDS_.*", &Sink::swarm_rounds, &sink_);
+      l->subscribe("FACT_STATUS", &Sink::status, &sink_);
+      lcms_.push_back(std::move(l));
+    }
+  }
+  lcm::LCM& at(size_t i) { return *lcms_[i]; }
+
+  // Handles messages for `ms` milliseconds.
+  void spin(int ms) {
+    const int64_t end = now_us() + ms * 1000LL;
+    std::vector<pollfd> fds;
+    for (auto& l : lcms_) fds.push_back({l->getFileno(), POLLIN, 0});
+    for (int64_t now = now_us(); now < end; now = now_us()) {
+      if (poll(fds.data(), fds.size(), static_cast<int>((end - now + 999) / 1000)) <= 0) continue;
+      for (size_t i = 0; i < fds.size(); ++i)
+        if (fds[i].revents & POLLIN) lcms_[i]->handle();
+    }
+  }
+  // Spins until pred() or `seconds` pass; returns pred().
+  bool wait_for(const std::function<bool()>& pred, double seconds) {
+    const int64_t end = now_us() + static_cast<int64_t>(seconds * 1e6);
+    while (!pred() && now_us() < end) spin(50);
+    return pred();
+  }
+
+  bool good = true;
+  std::map<int, fact::swarm_rounds_t> latest_rounds;
+  std::map<std::pair<std::string, int>, std::map<std::string, int64_t>> counters;
+  std::map<std::pair<std::string, int>, std::string> states;
+
+ private:
+  Sink sink_{this};
+  std::vector<std::unique_ptr<lcm::LCM>> lcms_;
+};
+
+fact::round_packet_t injected(int drone, int round) {
+  fact::round_packet_t m;
+  m.utime = 1700000000000000 + 1000000LL * round + drone;
+  m.drone_id = drone;
+  m.round = round;
+  m.position[0] = 0.5 * drone;
+  m.position[1] = -0.25 * round;
+  m.position[2] = 1.5;
+  m.yaw = 0.1 * drone - 0.3 * round;
+  m.count = 5;
+  for (int k = 0; k < m.count; ++k) {
+    fact::observation_t o;
+    o.odom_position[0] = 0.5 * drone + 0.01 * k;
+    o.odom_position[1] = -0.25 * round;
+    o.odom_position[2] = 1.5;
+    o.odom_yaw = m.yaw + 0.9 * k;
+    o.vector[0] = 2.0 + k;
+    o.vector[1] = 0.1 * drone - 0.2 * k;
+    o.vector[2] = 0.05 * round;
+    m.observations.push_back(o);
+  }
+  return m;
+}
+
+// The message without the publisher's own fields, as bytes.
+std::vector<uint8_t> content_bytes(fact::swarm_rounds_t m) {
+  m.utime = 0;
+  m.drone_id = 0;
+  return fact::app::encode_bytes(m);
+}
+
+std::string tail(const std::string& path, size_t lines) {
+  std::ifstream f(path);
+  std::vector<std::string> all;
+  for (std::string l; std::getline(f, l);) all.push_back(l);
+  std::string out;
+  for (size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i) out += "    " + all[i] + "\n";
+  return out;
+}
+
+class GossipProcesses : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string nets = network_interfaces();
+    if (nets != "lo")
+      GTEST_FAIL() << "network interfaces '" << nets << "': run this test inside a private network namespace "
+                   << "(scripts/netns-run.sh " << "fact_gossip_process_tests), never on a real network";
+    char tmpl[] = "/tmp/fact-gossip-test-XXXXXX";
+    ASSERT_NE(mkdtemp(tmpl), nullptr);
+    dir_ = tmpl;
+    std::ofstream(dir_ + "/swarm.key") << "8f3c6a1d2e4b5f60718293a4b5c6d7e8\n9011223344556677889900aabbccddee\n";
+    std::ofstream(dir_ + "/wrong.key") << std::string(32, 'w');  // raw 32 bytes, another key
+    log_ = dir_ + "/processes.log";
+  }
+  void TearDown() override {
+    // FACT_TEST_SHOW_LOG=1: the processes' log lines even when the test passes.
+    if (HasFailure() || std::getenv("FACT_TEST_SHOW_LOG"))
+      std::cerr << "last lines of " << log_ << ":\n" << tail(log_, HasFailure() ? 60 : 400);
+    if (!dir_.empty()) std::system(("rm -rf " + dir_).c_str());
+  }
+
+  std::vector<std::string> gossip_args(int id, const std::string& url, const std::string& key, bool roster) {
+    std::vector<std::string> a{FACT_GOSSIP_BINARY, "--drone-id", std::to_string(id), "--lcm-url", url, "--key-file", key,
+                               "--rounds-from-channel", "--min-members", std::to_string(kDrones), "--summary-period",
+                               "0.5", "--silence-timeout", "4", "--settle", "0.6", "--status-period", "0.25"};
+    if (roster) a.insert(a.end(), {"--roster", "0,1,2,3,4,5"});
+    return a;
+  }
+
+  std::string dir_, log_;
+};
+
+TEST_F(GossipProcesses, LossyRestartedAndAttackedSwarmAgreesByteForByte) {
+  std::vector<std::string> urls;
+  for (int i = 0; i < kDrones; ++i) urls.push_back(drone_url(i));
+  urls.push_back(kSwarmUrl);
+  Observer obs(urls);
+  ASSERT_TRUE(obs.good) << "LCM udpm unusable (no multicast route?)";
+
+  Processes procs;
+  for (int i = 0; i < kDrones; ++i)
+    procs.start("relay" + std::to_string(i),
+                {FACT_FAULT_RELAY_BINARY, "--drone-url", drone_url(i), "--swarm-url", kSwarmUrl, "--drop", "0.2",
+                 "--dup", "0.1", "--reorder", "0.2", "--max-delay-ms", "40", "--seed", std::to_string(100 + i),
+                 "--drone-id", std::to_string(i), "--status-period", "0.25"},
+                log_);
+  for (int i = 0; i < kDrones; ++i)
+    procs.start("gossip" + std::to_string(i), gossip_args(i, drone_url(i), dir_ + "/swarm.key", true), log_);
+  procs.start("intruder", gossip_args(kWrongKeyId, kSwarmUrl, dir_ + "/wrong.key", false), log_);
+  obs.spin(1000);  // subscriptions up, settled
+
+  const auto inject = [&](int round) {
+    for (int i = 0; i < kDrones; ++i) {
+      const fact::round_packet_t m = injected(i, round);
+      obs.at(static_cast<size_t>(i)).publish("FACT_ROUND_PACKET_" + std::to_string(i), &m);
+    }
+    const fact::round_packet_t m = injected(kWrongKeyId, round);
+    obs.at(kDrones).publish("FACT_ROUND_PACKET_" + std::to_string(kWrongKeyId), &m);
+  };
+  const auto all_complete = [&](int rounds) {
+    for (int i = 0; i < kDrones; ++i) {
+      auto it = obs.latest_rounds.find(i);
+      if (it == obs.latest_rounds.end() || it->second.complete_rounds != rounds) return false;
+    }
+    return true;
+  };
+
+  // Rounds 0 and 1.
+  inject(0);
+  obs.spin(100);
+  inject(1);
+  ASSERT_TRUE(obs.wait_for([&] { return all_complete(2); }, 10)) << "rounds 0–1 not complete everywhere";
+
+  // Drone 2's gossip dies and restarts with nothing.
+  procs.kill_now("gossip2");
+  obs.latest_rounds.erase(2);
+  obs.spin(300);
+  procs.start("gossip2", gossip_args(2, drone_url(2), dir_ + "/swarm.key", true), log_);
+  ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds.count(2) && obs.latest_rounds[2].complete_rounds == 2; }, 10))
+      << "the restarted gossip did not recover rounds 0–1";
+  const std::vector<uint8_t> recovered = content_bytes(obs.latest_rounds[2]);
+  EXPECT_EQ(recovered, content_bytes(obs.latest_rounds[0])) << "the restarted gossip recovered different data";
+
+  // Rounds 2 and 3.
+  inject(2);
+  obs.spin(100);
+  inject(3);
+  ASSERT_TRUE(obs.wait_for([&] { return all_complete(4); }, 10)) << "rounds 0–3 not complete everywhere";
+  obs.spin(700);  // a few more status messages
+
+  // Byte-identical, and exactly what was injected (drones ascending, then rounds).
+  fact::swarm_rounds_t expected;
+  expected.complete_rounds = 4;
+  expected.num_drones = kDrones;
+  for (int i = 0; i < kDrones; ++i) expected.drone_ids.push_back(i);
+  for (int i = 0; i < kDrones; ++i)
+    for (int r = 0; r < 4; ++r) expected.packets.push_back(injected(i, r));
+  expected.num_packets = static_cast<int32_t>(expected.packets.size());
+  const std::vector<uint8_t> want = content_bytes(expected);
+  for (int i = 0; i < kDrones; ++i) {
+    EXPECT_EQ(content_bytes(obs.latest_rounds[i]), want) << "drone " << i << "'s swarm_rounds_t differs";
+    fact::Rounds rounds;
+    EXPECT_EQ(fact::app::rounds_from_message(obs.latest_rounds[i], &rounds), "");
+    EXPECT_EQ(rounds.rounds.size(), 4u);
+  }
+
+  // Counters, from the status messages.
+  const auto gossip = [&](int id) -> std::map<std::string, int64_t>& { return obs.counters[{"fact-gossip", id}]; };
+  const auto state = [&](int id) { return obs.states[{"fact-gossip", id}]; };
+  int64_t auth_failed = 0, duplicates = 0;
+  for (int i = 0; i < kDrones; ++i) {
+    auto& g = gossip(i);
+    auth_failed += g["auth_failed"];
+    duplicates += g["duplicate_envelopes"] + g["duplicate_rounds"];
+    EXPECT_GT(g["packets_sent"], 0) << "drone " << i;
+    EXPECT_EQ(g["digest_mismatches"], 0) << "drone " << i;
+    EXPECT_EQ(state(i).find("9:"), std::string::npos) << "the intruder became a member of drone " << i;
+    auto& r = obs.counters[{"fact-fault-relay", i}];
+    EXPECT_GT(r["dropped"], 0) << "relay " << i;
+    EXPECT_GT(r["duplicated"], 0) << "relay " << i;
+    EXPECT_GT(r["delayed"], 0) << "relay " << i;
+  }
+  EXPECT_GT(auth_failed, 0) << "no wrong-key packet was counted";
+  EXPECT_GT(duplicates, 0);
+  EXPECT_GT(gossip(2)["requests_sent"], 0) << "the restarted gossip never requested";
+  EXPECT_GT(gossip(kWrongKeyId)["auth_failed"], 0) << "the intruder accepted the swarm's packets";
+  EXPECT_EQ(obs.latest_rounds.count(kWrongKeyId), 0u);
+
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name << " did not exit cleanly";
+}
+
+// The round-building path of fact-gossip: odometry (a spin of 2π plus a little) and detections of
+// two tracks go in on FACT_ODOMETRY_4 / FACT_DETECTIONS_4; the round packet it publishes (in its
+// swarm_rounds_t, alone with --min-members 1) must be exactly what fact::gossip::RoundBuilder
+// makes of the same samples. Bad input on its channels is counted, not fatal.
+TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
+  const std::string url = drone_url(4);
+  Observer obs({url});
+  ASSERT_TRUE(obs.good);
+  Processes procs;
+  procs.start("gossip4", {FACT_GOSSIP_BINARY, "--drone-id", "4", "--lcm-url", url, "--insecure", "--min-members", "1",
+                          "--settle", "0.2", "--status-period", "0.2"},
+              log_);
+  obs.spin(500);
+
+  fact::gossip::RoundBuilder local;  // the same defaults as fact-gossip's
+  const int64_t t_start = 1700000000000000;
+  int64_t seq = 0;
+  for (int i = 0; i <= 160; ++i) {
+    const int64_t t = t_start + i * 10000;  // 100 Hz, 1.6 s of odometry time
+    fact::odometry_t o{};
+    o.utime = t;
+    o.drone_id = 4;
+    o.seq = seq++;
+    o.position[0] = 0.2 * i * 0.01;
+    o.position[1] = -1.0;
+    o.position[2] = 1.2;
+    o.yaw = 0.4 + 2 * M_PI * 0.8 * i * 0.01;  // 0.8 turns per second: 2π after 1.25 s
+    obs.at(0).publish("FACT_ODOMETRY_4", &o);
+    local.add_odometry(t, Eigen::Vector3d(o.position[0], o.position[1], o.position[2]), o.yaw);
+    if (i % 3 == 1) {
+      fact::detections_t d{};
+      d.utime = t + 5000;  // between odometry samples
+      d.drone_id = 4;
+      d.frame_seq = i;
+      for (int track : {11, 12}) {
+        fact::detection_t det{};
+        det.track_id = track;
+        const double bearing = std::remainder(-(o.yaw + 0.03) + (track == 11 ? 1.0 : 2.5), 2 * M_PI);
+        det.vector[0] = 3 * std::cos(bearing);
+        det.vector[1] = 3 * std::sin(bearing);
+        det.vector[2] = 0.1 * track - 1.0;
+        det.confidence = 0.9f;
+        d.detections.push_back(det);
+        local.add_detection(d.utime, track, Eigen::Vector3d(det.vector[0], det.vector[1], det.vector[2]));
+      }
+      d.count = static_cast<int32_t>(d.detections.size());
+      obs.at(0).publish("FACT_DETECTIONS_4", &d);
+    }
+    if (i == 80) {  // bad input: NaN odometry, another drone's detections, a truncated envelope
+      fact::odometry_t bad = o;
+      bad.utime += 1;
+      bad.position[1] = std::nan("");
+      obs.at(0).publish("FACT_ODOMETRY_4", &bad);
+      fact::detections_t foreign{};
+      foreign.drone_id = 7;
+      obs.at(0).publish("FACT_DETECTIONS_4", &foreign);
+      const std::vector<uint8_t> junk(11, 0x5a);
+      obs.at(0).publish("FACT_GOSSIP", junk.data(), static_cast<unsigned>(junk.size()));
+    }
+    obs.spin(2);
+  }
+  const std::vector<fact::gossip::BuiltRound> rounds = local.take_rounds();
+  ASSERT_EQ(rounds.size(), 1u);
+  ASSERT_EQ(rounds[0].data.observations.size(), 2u);
+
+  ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds.count(4) > 0; }, 5)) << "no round published";
+  obs.spin(500);
+  const fact::swarm_rounds_t& got = obs.latest_rounds[4];
+  ASSERT_EQ(got.complete_rounds, 1);
+  ASSERT_EQ(got.num_packets, 1);
+  fact::gossip::Packet p{4, 0, rounds[0].end_utime, rounds[0].data};
+  EXPECT_EQ(fact::app::encode_bytes(got.packets[0]), fact::app::encode_bytes(fact::app::packet_to_message(p)));
+  auto& c = obs.counters[{"fact-gossip", 4}];
+  EXPECT_EQ(c["rejected_odometry"], 1);
+  EXPECT_EQ(c["foreign_drone"], 1);
+  EXPECT_EQ(c["undecodable"], 1);
+  EXPECT_EQ(c["rounds_built"], 1);
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name << " did not exit cleanly";
+}
+
+}  // namespace

@@ -1,0 +1,530 @@
+// Tests of fact-solver and fact-rounds-publish as real processes talking over LCM udpm://.
+//
+// Every run happens inside a private network namespace: main() re-executes this program through
+// scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, so
+// each ctest entry (one per test) gets a fresh namespace, and the processes a test spawns inherit
+// it. Listing the tests (--gtest_list_tests, for gtest_discover_tests) needs no namespace. As a
+// second guard the URL has ttl=0, and a test that finds another interface refuses to run.
+//
+// The binaries' paths come from compile definitions (FACT_SOLVER_BINARY, …).
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <net/if.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "common/convert.h"
+#include "fact/app_status_t.hpp"
+#include "fact/estimator.h"
+#include "fact/json_io.h"
+#include "fact/odometry_t.hpp"
+#include "fact/simgen.h"
+#include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// True when this process sees no network interface but lo: a private namespace. (if_nameindex asks
+// the kernel about this process's namespace; /sys/class/net would show the host's.)
+bool only_loopback() {
+  struct if_nameindex* names = if_nameindex();
+  if (names == nullptr) return false;
+  bool only_lo = true;
+  for (struct if_nameindex* i = names; i->if_index != 0; ++i)
+    if (std::string(i->if_name) != "lo") only_lo = false;
+  if_freenameindex(names);
+  return only_lo;
+}
+
+// A child process with stdout and stderr in files; terminated (SIGTERM, then SIGKILL) when
+// destroyed if still running.
+class Process {
+ public:
+  Process(const std::vector<std::string>& words, const fs::path& out, const fs::path& err) : err_(err) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<std::string> copy = words;
+    std::vector<char*> argv;
+    for (std::string& w : copy) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, copy[0].c_str(), &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+  ~Process() {
+    if (running()) {
+      kill(pid_, SIGTERM);
+      if (wait_for(std::chrono::seconds(3)) < -1) {
+        kill(pid_, SIGKILL);
+        wait_for(std::chrono::seconds(3));
+      }
+    }
+  }
+
+  bool started() const { return pid_ > 0; }
+  bool running() {
+    if (pid_ <= 0 || done_) return false;
+    int status = 0;
+    const pid_t r = waitpid(pid_, &status, WNOHANG);
+    if (r == 0) return true;
+    finish(status);
+    return false;
+  }
+  // Waits up to `limit` for the process to exit: its exit code, −1 if killed by a signal, −2 if
+  // still running.
+  int wait_for(Clock::duration limit) {
+    const auto end = Clock::now() + limit;
+    while (running()) {
+      if (Clock::now() >= end) return -2;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return code_;
+  }
+  // SIGTERM, then the exit code (as wait_for).
+  int stop() {
+    if (running()) kill(pid_, SIGTERM);
+    return wait_for(std::chrono::seconds(5));
+  }
+  std::string err() const { return read_file(err_); }
+
+ private:
+  void finish(int status) {
+    done_ = true;
+    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  pid_t pid_ = -1;
+  bool done_ = false;
+  int code_ = -2;
+  fs::path err_;
+};
+
+// The test's own LCM endpoint: keeps every message received on the channels it listens to.
+class Listener {
+ public:
+  explicit Listener(const std::string& url = kUrl) : lcm_(url) {}
+  bool good() { return lcm_.good(); }
+  lcm::LCM& lcm() { return lcm_; }
+
+  void listen(const std::string& channel) { lcm_.subscribe(channel, &Listener::on_message, this); }
+
+  // Handles messages until `done()` holds or `limit` passes; returns done().
+  bool until(const std::function<bool()>& done, Clock::duration limit = std::chrono::seconds(8)) {
+    const auto end = Clock::now() + limit;
+    while (!done()) {
+      if (Clock::now() >= end) return false;
+      lcm_.handleTimeout(50);
+    }
+    return true;
+  }
+
+  const std::vector<std::string>& raw(const std::string& channel) { return raw_[channel]; }
+
+  std::vector<fact::swarm_result_t> results(const std::string& channel) {
+    std::vector<fact::swarm_result_t> out;
+    for (const std::string& bytes : raw_[channel]) {
+      fact::swarm_result_t m;
+      if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()))
+        out.push_back(m);
+    }
+    return out;
+  }
+
+  // Every status message of `app` on FACT_STATUS from `drone`, oldest first.
+  std::vector<fact::app_status_t> statuses(const std::string& app, int drone) {
+    std::vector<fact::app_status_t> out;
+    for (const std::string& bytes : raw_["FACT_STATUS"]) {
+      fact::app_status_t m;
+      if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()) && m.app == app &&
+          m.drone_id == drone)
+        out.push_back(m);
+    }
+    return out;
+  }
+
+ private:
+  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    raw_[channel].emplace_back(static_cast<const char*>(rbuf->data), rbuf->data_size);
+  }
+
+  lcm::LCM lcm_;
+  std::map<std::string, std::vector<std::string>> raw_;
+};
+
+int64_t counter(const fact::app_status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_counters; ++i)
+    if (s.counter_names[i] == name) return s.counter_values[i];
+  return -1;
+}
+
+std::string encode(const fact::swarm_result_t& m) {
+  std::string bytes(static_cast<std::size_t>(m.getEncodedSize()), '\0');
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// The received result against an Estimate computed in this process: every field, doubles bit for bit.
+void expect_result_equals(const fact::swarm_result_t& got, const fact::Estimate& e, int drone_id, int64_t utime) {
+  EXPECT_EQ(got.drone_id, drone_id);
+  EXPECT_EQ(got.utime, utime);
+  EXPECT_EQ(got.mode, fact::to_string(e.mode));
+  EXPECT_EQ(got.status, fact::to_string(e.status));
+  EXPECT_EQ(got.reason, e.reason);
+  EXPECT_EQ(got.reference, e.reference);
+  EXPECT_EQ(got.rounds_used, e.rounds_used);
+  ASSERT_EQ(got.num_drones, static_cast<int>(e.drones.size()));
+  for (std::size_t i = 0; i < e.drones.size(); ++i) {
+    const std::string at = "drone " + std::to_string(e.drones[i].id);
+    EXPECT_EQ(got.drones[i].id, e.drones[i].id) << at;
+    EXPECT_EQ(got.drones[i].resolved, e.drones[i].resolved) << at;
+    EXPECT_TRUE(same_bits(got.drones[i].yaw, e.drones[i].yaw)) << at << ": " << got.drones[i].yaw << " vs " << e.drones[i].yaw;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_TRUE(same_bits(got.drones[i].position[k], e.drones[i].position[k]))
+          << at << " position[" << k << "]: " << got.drones[i].position[k] << " vs " << e.drones[i].position[k];
+  }
+  EXPECT_TRUE(same_bits(got.objective, e.certificate.objective));
+  EXPECT_TRUE(same_bits(got.dual_objective, e.certificate.dual_objective));
+  EXPECT_TRUE(same_bits(got.gap, e.certificate.gap));
+  EXPECT_TRUE(same_bits(got.min_eig, e.certificate.min_eig));
+  EXPECT_EQ(got.rank, e.certificate.rank);
+  EXPECT_EQ(got.solve_us, 0.0);  // not the clock: results are reproducible bit for bit
+}
+
+class SolverApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!only_loopback())
+      GTEST_SKIP() << "not in a private network namespace: run through scripts/netns-run.sh (ctest does)";
+    std::string pattern = (fs::temp_directory_path() / "fact-solver-app-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    processes_.clear();  // stops what still runs
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+
+  fs::path file(const std::string& name) const { return dir_ / name; }
+
+  Process& start(const std::string& name, std::vector<std::string> words) {
+    processes_.push_back(std::make_unique<Process>(words, file(name + ".out"), file(name + ".err")));
+    Process& p = *processes_.back();
+    EXPECT_TRUE(p.started()) << "cannot start " << words[0];
+    return p;
+  }
+
+  // Runs to completion (at most 10 s): the exit code.
+  int run(const std::string& name, std::vector<std::string> words) {
+    Process& p = start(name, std::move(words));
+    return p.wait_for(std::chrono::seconds(10));
+  }
+
+  Process& start_solver(int drone, std::vector<std::string> extra = {}) {
+    std::vector<std::string> words = {FACT_SOLVER_BINARY, "--drone-id", std::to_string(drone), "--lcm-url", kUrl,
+                                      "--status-period", "0.2"};
+    words.insert(words.end(), extra.begin(), extra.end());
+    return start("solver" + std::to_string(drone), words);
+  }
+
+  // Waits for the solver's first heartbeat: after it, the solver is subscribed.
+  void await_ready(Listener& l, int drone) {
+    ASSERT_TRUE(l.until([&] { return !l.statuses("fact-solver", drone).empty(); }))
+        << "no status from fact-solver " << drone;
+  }
+
+  std::string write_rounds(const fact::Rounds& rounds, const std::string& name = "rounds.json") {
+    std::ofstream out(file(name), std::ios::binary);
+    out << fact::rounds_to_json(rounds);
+    return file(name).string();
+  }
+
+  int publish(const std::string& rounds_file, int drone, std::vector<std::string> extra = {}) {
+    std::vector<std::string> words = {FACT_ROUNDS_PUBLISH_BINARY, "--input", rounds_file, "--drone-id",
+                                      std::to_string(drone), "--lcm-url", kUrl};
+    words.insert(words.end(), extra.begin(), extra.end());
+    return run("publish" + std::to_string(drone), words);
+  }
+
+  fs::path dir_;
+  std::vector<std::unique_ptr<Process>> processes_;
+};
+
+// 5 drones, 3 rounds, depth-camera noise: a scenario the estimator certifies.
+const fact::Rounds& scenario_rounds() {
+  static const fact::Rounds r = [] {
+    fact::SimOptions o;
+    o.drones = 5;
+    o.rounds = 3;
+    o.noise = fact::NoiseKind::depth;
+    o.seed = 7;
+    return fact::generate_scenario(o).rounds;
+  }();
+  return r;
+}
+
+TEST(SolverAppCli, HelpExitsZeroAndListsTheFlags) {
+  for (const char* binary : {FACT_SOLVER_BINARY, FACT_ROUNDS_PUBLISH_BINARY}) {
+    const fs::path dir = fs::temp_directory_path();
+    const fs::path out = dir / ("fact-help-" + std::to_string(getpid()) + ".out");
+    const fs::path err = dir / ("fact-help-" + std::to_string(getpid()) + ".err");
+    int code = -3;
+    std::string text;
+    {
+      Process p({binary, "--help"}, out, err);
+      code = p.wait_for(std::chrono::seconds(10));
+      text = read_file(out);
+    }
+    EXPECT_EQ(code, 0) << binary;
+    for (const char* flag : {"--lcm-url", "--drone-id"}) EXPECT_NE(text.find(flag), std::string::npos) << binary << ": " << flag;
+    fs::remove(out);
+    fs::remove(err);
+  }
+}
+
+TEST_F(SolverApp, BadFlagsExitTwoNamingTheFlag) {
+  const std::vector<std::vector<std::string>> solver_cases = {
+      {"--mode", "bogus"}, {"--drone-id", "-1"}, {"--status-period", "0"}, {"--noise-floor", "nan"},
+      {"--max-complete-rounds", "0"}, {"--no-such-flag", "1"}, {"--reference", "-2"}};
+  int i = 0;
+  for (const auto& args : solver_cases) {
+    std::vector<std::string> words = {FACT_SOLVER_BINARY, "--lcm-url", kUrl};
+    words.insert(words.end(), args.begin(), args.end());
+    const std::string name = "bad" + std::to_string(i++);
+    EXPECT_EQ(run(name, words), 2) << args[0] << " " << args[1];
+    EXPECT_NE(read_file(file(name + ".err")).find(args[0]), std::string::npos) << read_file(file(name + ".err"));
+  }
+  const std::string good = write_rounds(scenario_rounds());
+  std::ofstream(file("broken.json")) << "{\"format\": \"fact-rounds-v1\", \"drones\": [1, 2], ";
+  const std::vector<std::vector<std::string>> publish_cases = {
+      {"--input", good, "--count", "-1"},
+      {"--input", good, "--interval", "-0.5"},
+      {"--input", file("missing.json").string()},
+      {"--input", file("broken.json").string()},
+      {"--input", good, "--drone-id", "-3"}};
+  for (const auto& args : publish_cases) {
+    std::vector<std::string> words = {FACT_ROUNDS_PUBLISH_BINARY, "--lcm-url", kUrl};
+    words.insert(words.end(), args.begin(), args.end());
+    const std::string name = "bad" + std::to_string(i++);
+    EXPECT_EQ(run(name, words), 2) << args[0] << " " << args[1] << " " << args.back();
+    EXPECT_NE(read_file(file(name + ".err")).find("error"), std::string::npos);
+  }
+}
+
+TEST_F(SolverApp, UnusableLcmUrlExitsOne) {
+  EXPECT_EQ(run("badurl", {FACT_SOLVER_BINARY, "--lcm-url", "nosuchprovider://x"}), 1);
+  EXPECT_NE(read_file(file("badurl.err")).find("cannot open LCM"), std::string::npos) << read_file(file("badurl.err"));
+}
+
+// Two solvers (drones 1 and 2) fed the same rounds by fact-rounds-publish publish the same result,
+// and it is estimate_poses' result computed here, bit for bit.
+TEST_F(SolverApp, TwoDronesPublishTheInProcessEstimateBitForBit) {
+  Listener l;
+  ASSERT_TRUE(l.good());
+  l.listen("FACT_RESULT_1");
+  l.listen("FACT_RESULT_2");
+  l.listen("FACT_STATUS");
+  const std::string rounds_file = write_rounds(scenario_rounds());
+  Process& s1 = start_solver(1);
+  Process& s2 = start_solver(2);
+  await_ready(l, 1);
+  await_ready(l, 2);
+  const int64_t utime = 1700000000123456;
+  for (int drone : {1, 2})
+    ASSERT_EQ(publish(rounds_file, drone, {"--utime", std::to_string(utime), "--count", "2", "--interval", "0.1"}), 0);
+  ASSERT_TRUE(l.until([&] { return !l.raw("FACT_RESULT_1").empty() && !l.raw("FACT_RESULT_2").empty(); }))
+      << s1.err() << s2.err();
+
+  // What fact-solver must have computed: the file, decoded as the publisher did, estimated here.
+  const fact::Rounds rounds = fact::rounds_from_json(read_file(rounds_file));
+  const fact::Estimate expected = fact::estimate_poses(rounds, fact::EstimateOptions{});
+  ASSERT_TRUE(expected.certified()) << expected.reason;
+
+  const auto r1 = l.results("FACT_RESULT_1");
+  const auto r2 = l.results("FACT_RESULT_2");
+  ASSERT_EQ(r1.size(), 1u);
+  ASSERT_EQ(r2.size(), 1u);
+  expect_result_equals(r1[0], expected, 1, utime);
+  expect_result_equals(r2[0], expected, 2, utime);
+  // The whole message, byte for byte, apart from the publisher's id.
+  fact::swarm_result_t as1 = r2[0];
+  as1.drone_id = 1;
+  EXPECT_EQ(encode(as1), l.raw("FACT_RESULT_1")[0]);
+  fact::swarm_result_t built = fact::app::result_to_message(expected, 1, utime);
+  built.solve_us = 0;
+  EXPECT_EQ(encode(built), l.raw("FACT_RESULT_1")[0]);
+
+  // The repeat was ignored, and counted.
+  ASSERT_TRUE(l.until([&] {
+    const auto s = l.statuses("fact-solver", 1);
+    return !s.empty() && counter(s.back(), "stale") == 1;
+  })) << s1.err();
+  const fact::app_status_t last = l.statuses("fact-solver", 1).back();
+  EXPECT_EQ(counter(last, "results_published"), 1);
+  EXPECT_EQ(counter(last, "certified"), 1);
+  EXPECT_EQ(counter(last, "undecodable"), 0);
+  EXPECT_EQ(counter(last, "invalid_input"), 0);
+  EXPECT_EQ(s1.stop(), 0) << s1.err();
+  EXPECT_EQ(s2.stop(), 0) << s2.err();
+  EXPECT_NE(s1.err().find("estimate: complete_rounds=3"), std::string::npos) << s1.err();
+}
+
+// Rounds completing one by one: one result per new round, each the in-process estimate of that
+// many rounds; repeats publish nothing.
+TEST_F(SolverApp, EstimatesAgainWheneverARoundCompletes) {
+  Listener l;
+  ASSERT_TRUE(l.good());
+  l.listen("FACT_RESULT_4");
+  l.listen("FACT_STATUS");
+  const std::string rounds_file = write_rounds(scenario_rounds());
+  Process& s = start_solver(4, {"--mode", "complex"});
+  // A second solver on the same input using only the first 2 rounds: the third round is nothing new.
+  l.listen("FACT_RESULT_K2");
+  Process& k2 = start("solver4k2", {FACT_SOLVER_BINARY, "--drone-id", "4", "--lcm-url", kUrl, "--mode", "complex",
+                                    "--rounds", "2", "--result-channel", "FACT_RESULT_K2", "--status-channel",
+                                    "FACT_STATUS_K2"});
+  l.listen("FACT_STATUS_K2");
+  ASSERT_TRUE(l.until([&] { return !l.raw("FACT_STATUS_K2").empty(); }));
+  await_ready(l, 4);
+  ASSERT_EQ(publish(rounds_file, 4, {"--incremental", "--count", "4", "--interval", "0.3", "--utime", "42"}), 0);
+  ASSERT_TRUE(l.until([&] { return l.raw("FACT_RESULT_4").size() >= 3; })) << s.err();
+  const auto results = l.results("FACT_RESULT_4");
+  ASSERT_EQ(results.size(), 3u);
+  const fact::Rounds rounds = fact::rounds_from_json(read_file(rounds_file));
+  fact::EstimateOptions options;
+  options.mode = fact::Mode::complex;
+  for (int k = 1; k <= 3; ++k) {
+    SCOPED_TRACE("rounds " + std::to_string(k));
+    expect_result_equals(results[k - 1], fact::estimate_poses(fact::first_rounds(rounds, k), options), 4, 42);
+  }
+  // Rounds 3 (twice) are stale to it: once it has counted them, its results are final.
+  ASSERT_TRUE(l.until([&] {
+    for (const std::string& bytes : l.raw("FACT_STATUS_K2")) {
+      fact::app_status_t st;
+      if (st.decode(bytes.data(), 0, static_cast<int>(bytes.size())) > 0 && counter(st, "stale") == 2) return true;
+    }
+    return false;
+  })) << k2.err();
+  EXPECT_EQ(k2.stop(), 0) << k2.err();
+  const auto capped = l.results("FACT_RESULT_K2");
+  ASSERT_EQ(capped.size(), 2u) << k2.err();
+  EXPECT_EQ(encode(capped[1]), encode(results[1]));
+  EXPECT_EQ(s.stop(), 0) << s.err();
+}
+
+// Truncated, foreign, garbage and invalid messages on the solver's channel are counted; the
+// solver keeps running and still answers the next good message.
+TEST_F(SolverApp, BadInputIsCountedAndTheSolverKeepsRunning) {
+  Listener l;
+  ASSERT_TRUE(l.good());
+  l.listen("FACT_RESULT_3");
+  l.listen("FACT_STATUS");
+  Process& s = start_solver(3);
+  await_ready(l, 3);
+  const std::string channel = "FACT_SWARM_ROUNDS_3";
+  const fact::swarm_rounds_t good = fact::app::rounds_to_message(scenario_rounds(), 3, 99);
+  std::string bytes(static_cast<std::size_t>(good.getEncodedSize()), '\0');
+  good.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+
+  // Undecodable: truncated, a foreign type, a few garbage bytes.
+  l.lcm().publish(channel, bytes.data(), static_cast<unsigned>(bytes.size() / 2));
+  fact::odometry_t odometry{};
+  odometry.drone_id = 3;
+  l.lcm().publish(channel, &odometry);
+  const char garbage[5] = {1, 2, 3, 4, 5};
+  l.lcm().publish(channel, garbage, sizeof garbage);
+  // Decodable but invalid: NaN, an unknown drone id, another drone's gossip, rounds far in the future.
+  fact::swarm_rounds_t nan = good;
+  nan.packets[1].observations[0].vector[2] = std::nan("");
+  l.lcm().publish(channel, &nan);
+  fact::swarm_rounds_t unknown = good;
+  unknown.packets[0].drone_id = 77;
+  l.lcm().publish(channel, &unknown);
+  fact::swarm_rounds_t other = good;
+  other.drone_id = 5;
+  l.lcm().publish(channel, &other);
+  fact::swarm_rounds_t future = good;
+  future.complete_rounds = 1000000;
+  l.lcm().publish(channel, &future);
+  // Then the good one.
+  l.lcm().publish(channel, &good);
+
+  ASSERT_TRUE(l.until([&] { return !l.raw("FACT_RESULT_3").empty(); })) << s.err();
+  ASSERT_TRUE(l.until([&] {
+    const auto st = l.statuses("fact-solver", 3);
+    return !st.empty() && counter(st.back(), "results_published") == 1;
+  })) << s.err();
+  const fact::app_status_t last = l.statuses("fact-solver", 3).back();
+  EXPECT_EQ(counter(last, "undecodable"), 3) << s.err();
+  EXPECT_EQ(counter(last, "invalid_input"), 4) << s.err();
+  EXPECT_EQ(counter(last, "messages"), 8);
+  const auto results = l.results("FACT_RESULT_3");
+  ASSERT_EQ(results.size(), 1u);
+  expect_result_equals(results[0], fact::estimate_poses(scenario_rounds(), fact::EstimateOptions{}), 3, 99);
+  EXPECT_TRUE(s.running());
+  const std::string log = s.err();
+  EXPECT_NE(log.find("undecodable message on FACT_SWARM_ROUNDS_3"), std::string::npos) << log;
+  EXPECT_NE(log.find("nan"), std::string::npos) << log;
+  EXPECT_NE(log.find("77"), std::string::npos) << log;
+  EXPECT_NE(log.find("1000000"), std::string::npos) << log;
+  EXPECT_EQ(s.stop(), 0) << log;
+}
+
+}  // namespace
+
+// Runs the tests inside a private network namespace (see the top of this file).
+int main(int argc, char** argv) {
+  bool listing = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
+  if (!listing && !only_loopback()) {
+    std::vector<char*> words = {const_cast<char*>(FACT_NETNS_RUN)};
+    std::string self = fs::read_symlink("/proc/self/exe").string();
+    words.push_back(self.data());
+    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+    words.push_back(nullptr);
+    execv(FACT_NETNS_RUN, words.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
+    return 125;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
