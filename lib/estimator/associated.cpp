@@ -1,18 +1,25 @@
 // Mode associated: yaw-invariant association of mutual pairs.
 //
 // 1. Hypotheses. For drones i, j and a round, a detection a of i and b of j may be the mutual pair
-//    "i sees j, j sees i" only if |v_a| ≈ |v_b| and v_a,z ≈ −v_b,z (neither depends on yaw). Each
-//    such pair fixes the pose of f_j in f_i: x_i = R(θ) x_j + t.
+//    "i sees j, j sees i" only if |v_a| ≈ |v_b| and v_a,z ≈ −v_b,z (neither depends on yaw; each
+//    gated with its own σ from the detections' covariances). Each such pair fixes the pose of f_j
+//    in f_i: x_i = R(θ) x_j + t.
 // 2. Verification. Under a hypothesis, j's points (its positions and detections, every round) are
-//    mapped into f_i and matched to i's points by mutual nearest neighbour within the gate; the
-//    pose is refined by weighted Procrustes on those matches and they are counted again. The count
-//    is the hypothesis' evidence. A pair of drones becomes an edge when its best hypothesis has
-//    evidence ≥ 3 and beats every distinct hypothesis by ≥ 2 (otherwise: weak or ambiguous, e.g. a
-//    rotation-symmetric formation explains several poses equally well).
-// 3. Rotations by certified synchronisation (the SO(2) connection-Laplacian SDP, d = 2, which has
+//    mapped into f_i and matched to i's points by mutual nearest neighbour in Mahalanobis distance
+//    within the gate; each match scores its log-likelihood ratio against clutter. The pose is
+//    refined by weighted Procrustes on the matches and they are scored again. A pair of drones
+//    becomes an edge when its best hypothesis has ≥ kMinEvidence matches, a score ≥ kMinScore and
+//    beats every distinct hypothesis (one sharing under half its matches) by ≥ kMinScoreMargin;
+//    otherwise it is weak or ambiguous (a rotation-symmetric formation explains several poses
+//    equally well).
+// 3. Assembly. Edges join clusters strongest first; an edge that would put two drones closer than
+//    min_separation in some round is dropped (one of its detections belongs to another drone).
+// 4. Rotations by certified synchronisation (the SO(2) connection-Laplacian SDP, d = 2, which has
 //    the complex form's structure) over the edges connected to the reference, weighted by each
 //    edge's yaw information; edges that disagree with the synchronised yaws are dropped.
-// 4. Translations by least squares over every verified correspondence of every round.
+// 5. Translations by least squares over every verified correspondence of every round, then the
+//    checks: no two drones in one place, every pose precise enough and in agreement with its
+//    detections (estimate.cpp: precision_problem).
 #include "internal.h"
 
 #include <Eigen/Dense>

@@ -87,7 +87,7 @@ struct Estimate {
   std::string reason;
   int reference = -1;
   int rounds_used = 0;
-  std::vector<DronePose> drones;  // one per id in Rounds::drones, same order
+  std::vector<DronePose> drones;  // one per id in Rounds::drones, ascending by id
   std::vector<int> unresolved;    // ids with resolved == false
   Certificate certificate;
   std::vector<std::pair<std::string, double>> timing_us;  // named stages, then "total"
