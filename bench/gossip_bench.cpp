@@ -8,9 +8,13 @@
 //   clean      every gossip on one swarm URL, no faults.
 //   lossy      every gossip behind its own fact-fault-relay: --drop loss, --dup duplication and
 //              --reorder hold-back towards each drone (independent per receiver, seeded).
-//   spin       the round-building path at steady state: the bench plays 15 Hz odometry (a spin
-//              every --period s) and 15 Hz detections (the drones in view) to every gossip, which
-//              builds and exchanges its own rounds; no faults.
+//   spin       the full per-drone chain at steady state: the bench plays 15 Hz raw odometry (a
+//              spin every --period s) on FACT_VIO_RAW_<id> to one fact-vio-relay per drone, which
+//              publishes FACT_ODOMETRY_<id>; it plays 15 Hz detections (the drones in view) on
+//              FACT_DETECTIONS_<id>; each fact-gossip builds and exchanges its own rounds and one
+//              fact-solver per drone solves FACT_SWARM_ROUNDS_<id> and publishes FACT_RESULT_<id>
+//              (counted, with their status strings; the synthetic detections need not make a
+//              certifiable swarm); no faults.
 // Figures:
 //   latency    per round, from the moment the last drone's round packet was injected to the
 //              moment the bench has received every drone's swarm_rounds_t holding that round
@@ -20,8 +24,9 @@
 //              swarm URL during the R rounds' window (R × period), divided by N × R. Counted as
 //              LCM message bytes (envelope incl. 32-byte MAC) and on the wire (+ the LCM header
 //              and channel name, + 28 bytes IPv4/UDP per datagram). Target ≤ 10 kB.
-//   cpu        each gossip's user + system time over the window (/proc/<pid>/stat), as % of one
-//              core; also the whole lifetime from wait4's rusage.
+//   cpu        each process's user + system time over the window (/proc/<pid>/stat), as % of one
+//              core; also the whole lifetime from wait4's rusage. In the spin scenario per drone:
+//              relay, gossip, solver and the chain's sum (target: the chain <= 5 % of one core).
 // Writes --out (default bench/results/gossip.csv, relative to the current directory) and prints
 // the figures.
 #include "common/convert.h"
@@ -30,6 +35,7 @@
 #include "fact/gossip_packet_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "fact/round_packet_t.hpp"
+#include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 #include "fact_gossip/wire.h"
 
@@ -64,6 +70,13 @@ extern char** environ;
 
 namespace {
 
+// The apps are all built into one directory (build/apps): another app next to fact-gossip.
+std::string sibling_binary(const std::string& name) {
+  const std::string gossip = FACT_GOSSIP_BINARY;
+  const auto slash = gossip.rfind('/');
+  return (slash == std::string::npos ? std::string() : gossip.substr(0, slash + 1)) + name;
+}
+
 struct Config {
   int drones = 8;
   int rounds = 5;               // rounds per exchange scenario
@@ -75,6 +88,8 @@ struct Config {
   std::string out = "bench/results/gossip.csv";
   std::string gossip_bin = FACT_GOSSIP_BINARY;
   std::string relay_bin = FACT_FAULT_RELAY_BINARY;
+  std::string vio_relay_bin = sibling_binary("fact-vio-relay");   // spin scenario
+  std::string solver_bin = sibling_binary("fact-solver");         // spin scenario
   std::string log = "/tmp/fact-bench-gossip.log";
   bool quick = false;
 };
@@ -199,6 +214,12 @@ class Observer {
       auto& c = o->counters[{m.app, m.drone_id}];
       for (int k = 0; k < m.num_counters; ++k) c[m.counter_names[k]] = m.counter_values[k];
     }
+    void result(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fact::swarm_result_t m;
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) != static_cast<int>(rbuf->data_size)) return;
+      o->results[m.drone_id] += 1;
+      o->result_status[m.status] += 1;
+    }
     void gossip(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
       if (!o->counting) return;
       fact::gossip_packet_t m;
@@ -217,6 +238,7 @@ class Observer {
       if (!l->good()) throw std::runtime_error("LCM unusable: " + urls[i]);
       l->subscribe("FACT_SWARM_ROUNDS_.*", &Sink::swarm_rounds, &sink_);
       l->subscribe("FACT_STATUS", &Sink::status, &sink_);
+      l->subscribe("FACT_RESULT_.*", &Sink::result, &sink_);
       if (static_cast<int>(i) == gossip_url_index) l->subscribe("FACT_GOSSIP", &Sink::gossip, &sink_);
       lcms_.push_back(std::move(l));
     }
@@ -245,6 +267,8 @@ class Observer {
   bool counting = false;
   int64_t message_bytes = 0, wire_bytes = 0, datagrams = 0;
   std::map<int, int64_t> by_kind;
+  std::map<int, int64_t> results;                // drone → swarm_result_t received
+  std::map<std::string, int64_t> result_status;  // status string → count
 
  private:
   Sink sink_{this};
@@ -453,12 +477,22 @@ void run_exchange(const Config& c, bool lossy, const std::string& key, Report* r
   report->add(name, "processes_not_exiting_0", bad_exit, "", "0");
 }
 
-// spin: the round-building path, 15 Hz odometry and detections, own rounds built and exchanged.
+// spin: the full chain per drone (vio-relay → gossip → solver), 15 Hz raw odometry and
+// detections, own rounds built, exchanged and solved.
 void run_spin(const Config& c, const std::string& key, Report* report) {
   const std::string name = "spin";
+  for (const std::string& bin : {c.vio_relay_bin, c.solver_bin})
+    if (access(bin.c_str(), X_OK) != 0)
+      throw std::runtime_error("spin scenario needs " + bin + " (build fact-vio-relay and fact-solver, or pass "
+                               "--vio-relay-bin/--solver-bin)");
   Observer obs({kSwarmUrl}, 0);
   Processes procs(c.log);
-  for (int i = 0; i < c.drones; ++i) procs.start("gossip" + std::to_string(i), gossip_args(c, i, kSwarmUrl, key, false));
+  for (int i = 0; i < c.drones; ++i) {
+    const std::string id = std::to_string(i);
+    procs.start("relay" + id, {c.vio_relay_bin, "--source", "lcm", "--drone-id", id, "--lcm-url", kSwarmUrl});
+    procs.start("gossip" + id, gossip_args(c, i, kSwarmUrl, key, false));
+    procs.start("solver" + id, {c.solver_bin, "--drone-id", id, "--lcm-url", kSwarmUrl});
+  }
   obs.spin(1.0);
   // Drone i at (3 cos(2πi/N), 3 sin(2πi/N)), each spinning at 2π per period; its odometry frame is
   // the world turned by 0.3 i (the frames differ, as they do).
@@ -493,7 +527,7 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
       o.position[1] = sf * p.x() + cf * p.y();
       o.position[2] = 1.5;
       o.yaw = world_yaw - frame_yaw;  // unwrapped
-      obs.at(0).publish("FACT_ODOMETRY_" + std::to_string(i), &o);
+      obs.at(0).publish("FACT_VIO_RAW_" + std::to_string(i), &o);
       fact::detections_t d{};
       d.utime = next;
       d.drone_id = i;
@@ -522,12 +556,43 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
   const double window = 1e-6 * static_cast<double>(end - warm);
   obs.spin(1.1);
   std::vector<Child> done = procs.stop_all();
-  std::vector<double> cpu, life;
+  // Per drone, % of one core over the window: relay, gossip, solver, and the chain's sum.
+  std::map<std::string, std::vector<double>> cpu_of;  // kind → per drone
+  std::vector<double> life;                           // gossip, whole lifetime
   int bad_exit = 0;
   for (const Child& ch : done) {
-    cpu.push_back(100.0 * ch.window_cpu / window);
-    life.push_back(100.0 * ch.lifetime_cpu / ch.lifetime);
+    const auto digit = ch.name.find_first_of("0123456789");
+    const std::string kind = ch.name.substr(0, digit);
+    const size_t drone = static_cast<size_t>(std::stoi(ch.name.substr(digit)));
+    auto& v = cpu_of[kind];
+    v.resize(static_cast<size_t>(n), 0.0);
+    v[drone] = 100.0 * ch.window_cpu / window;
+    if (kind == "gossip") life.push_back(100.0 * ch.lifetime_cpu / ch.lifetime);
     if (ch.exit_code != 0) ++bad_exit;
+  }
+  for (const char* kind : {"relay", "gossip", "solver"}) cpu_of[kind].resize(static_cast<size_t>(n), 0.0);
+  std::vector<double> chain(static_cast<size_t>(n), 0.0);
+  for (size_t i = 0; i < chain.size(); ++i) chain[i] = cpu_of["relay"][i] + cpu_of["gossip"][i] + cpu_of["solver"][i];
+  const auto mean = [](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(std::max<size_t>(v.size(), 1));
+  };
+  const auto max = [](const std::vector<double>& v) { return v.empty() ? NAN : *std::max_element(v.begin(), v.end()); };
+  int solvers_with_result = 0;
+  int64_t results_total = 0, results_min = -1;
+  for (int i = 0; i < n; ++i) {
+    const int64_t k = obs.results.count(i) ? obs.results[i] : 0;
+    if (k > 0) ++solvers_with_result;
+    results_total += k;
+    results_min = results_min < 0 ? k : std::min(results_min, k);
+  }
+  int64_t relayed = 0, relay_rejected = 0, solver_estimates = 0;
+  for (int i = 0; i < n; ++i) {
+    for (const auto& [counter, value] : obs.counters[{"fact-vio-relay", i}]) {
+      if (counter == "published") relayed += value;
+      else if (counter.rfind("rejected_", 0) == 0 || counter == "wrong_drone_id" || counter == "undecodable")
+        relay_rejected += value;
+    }
+    solver_estimates += obs.counters[{"fact-solver", i}]["estimates"];
   }
   int min_rounds = 1 << 30;
   for (int i = 0; i < n; ++i) min_rounds = std::min(min_rounds, obs.latest.count(i) ? obs.latest[i].complete_rounds : 0);
@@ -546,11 +611,25 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
   report->add(name, "complete_rounds_min", min_rounds, "rounds");
   report->add(name, "drones_byte_identical", identical, "drones", std::to_string(n));
   report->add(name, "observations_per_packet", packets ? static_cast<double>(obs_total) / packets : 0, "");
-  report->add(name, "gossip_cpu_mean", std::accumulate(cpu.begin(), cpu.end(), 0.0) / std::max<size_t>(cpu.size(), 1),
-              "% of one core");
-  report->add(name, "gossip_cpu_max", cpu.empty() ? NAN : *std::max_element(cpu.begin(), cpu.end()), "% of one core");
-  report->add(name, "gossip_cpu_lifetime_mean", std::accumulate(life.begin(), life.end(), 0.0) / std::max<size_t>(life.size(), 1),
-              "% of one core");
+  report->add(name, "relay_odometry_published", static_cast<double>(relayed), "messages");
+  report->add(name, "relay_odometry_rejected", static_cast<double>(relay_rejected), "messages", "0");
+  report->add(name, "solver_estimates", static_cast<double>(solver_estimates), "");
+  report->add(name, "solvers_with_result", solvers_with_result, "drones", std::to_string(n));
+  report->add(name, "results_total", static_cast<double>(results_total), "swarm_result_t");
+  report->add(name, "results_min_per_drone", static_cast<double>(std::max<int64_t>(results_min, 0)), "swarm_result_t", ">= 1");
+  for (const auto& [status, count] : obs.result_status)
+    report->add(name, "results_status_" + (status.empty() ? std::string("empty") : status), static_cast<double>(count),
+                "swarm_result_t");
+  report->add(name, "window", window, "s");
+  report->add(name, "relay_cpu_mean", mean(cpu_of["relay"]), "% of one core");
+  report->add(name, "relay_cpu_max", max(cpu_of["relay"]), "% of one core");
+  report->add(name, "gossip_cpu_mean", mean(cpu_of["gossip"]), "% of one core");
+  report->add(name, "gossip_cpu_max", max(cpu_of["gossip"]), "% of one core");
+  report->add(name, "solver_cpu_mean", mean(cpu_of["solver"]), "% of one core");
+  report->add(name, "solver_cpu_max", max(cpu_of["solver"]), "% of one core");
+  report->add(name, "chain_cpu_mean", mean(chain), "% of one core", "<= 5");
+  report->add(name, "chain_cpu_max", max(chain), "% of one core", "<= 5");
+  report->add(name, "gossip_cpu_lifetime_mean", mean(life), "% of one core");
   report->add(name, "processes_not_exiting_0", bad_exit, "", "0");
 }
 
@@ -572,6 +651,8 @@ int main(int argc, char** argv) {
   cli.add_option("--out", c.out, "CSV to write")->capture_default_str();
   cli.add_option("--gossip-bin", c.gossip_bin, "fact-gossip executable")->capture_default_str();
   cli.add_option("--relay-bin", c.relay_bin, "fact-fault-relay executable")->capture_default_str();
+  cli.add_option("--vio-relay-bin", c.vio_relay_bin, "fact-vio-relay executable (spin scenario)")->capture_default_str();
+  cli.add_option("--solver-bin", c.solver_bin, "fact-solver executable (spin scenario)")->capture_default_str();
   cli.add_option("--log", c.log, "Where the processes' log lines go")->capture_default_str();
   cli.add_flag("--quick", c.quick, "3 rounds every 1.5 s, 8 s of spin scenario");
   try {
@@ -599,7 +680,8 @@ int main(int argc, char** argv) {
     run_exchange(c, false, key, &report);
     std::cerr << "lossy: drop " << c.drop << ", dup " << c.dup << ", reorder " << c.reorder << " …\n";
     run_exchange(c, true, key, &report);
-    std::cerr << "spin: " << c.odometry_hz << " Hz odometry + detections, " << c.spin_seconds << " s …\n";
+    std::cerr << "spin: " << c.odometry_hz << " Hz raw odometry + detections through vio-relay, gossip and solver, "
+              << c.spin_seconds << " s …\n";
     run_spin(c, key, &report);
   } catch (const std::exception& e) {
     std::cerr << "fact-bench-gossip: " << e.what() << "\n";
