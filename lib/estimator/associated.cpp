@@ -437,7 +437,7 @@ bool synchronise(const Problem& p, std::vector<Edge>* edges, Solution* s, const 
   const double yaw_floor = std::sqrt(2.0) * p.noise.odometry_yaw;
   s->sdp = sdp::solve(sync_cost(s->members, *edges, yaw_floor), 2, o);
   s->yaw.assign(p.drones(), 0.0);
-  if (!s->sdp.certified()) return true;
+  if (!s->sdp.certified() || s->sdp.Y.cols() < 2) return true;
   const std::vector<double> y = yaws_from_sdp(s->sdp, 0);  // members[0] is the reference
   for (size_t n = 0; n < s->members.size(); ++n) s->yaw[s->members[n]] = y[n];
   Edge* worst = nullptr;
@@ -476,7 +476,7 @@ Solution solve_graph(const Problem& p, const PointSets& points, std::vector<Edge
     s.members = component(p.drones(), p.reference, *edges);
     if (s.members.size() < 2) return s;
     if (!synchronise(p, edges, &s, o)) continue;
-    if (!s.sdp.certified()) return s;
+    if (!s.sdp.certified() || s.sdp.Y.cols() < 2) return s;
     if (!translate(p, points, edges, &s)) continue;
     s.conflict = final_overlap(p, s);
     s.consistent = s.conflict.empty();
@@ -507,7 +507,8 @@ Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) 
   std::vector<int> outside;
   for (int i = 0; i < p.drones(); ++i)
     if (!std::count(s.members.begin(), s.members.end(), i)) outside.push_back(i);
-  const bool sdp_unique = s.members.size() >= 2 && s.sdp.status == sdp::Status::certified_unique;
+  const bool sdp_unique =
+      s.members.size() >= 2 && s.sdp.status == sdp::Status::certified_unique && s.sdp.Y.cols() >= 2;
   if (s.members.size() >= 2 && !sdp_unique) {
     out.reason = std::string("rotation synchronisation SDP ") + sdp::to_string(s.sdp.status) + ": " + s.sdp.reason;
     return out;

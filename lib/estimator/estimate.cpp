@@ -117,14 +117,14 @@ bool precise(const Problem& p, const PoseSigma& s) {
 
 std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma) {
   for (size_t i = 0; i < sigma.size(); ++i) {
-    if (sigma[i].yaw_step > p.max_yaw_sigma || sigma[i].position_step > p.max_position_sigma) {
+    if (!(sigma[i].yaw_step <= p.max_yaw_sigma) || !(sigma[i].position_step <= p.max_position_sigma)) {
       std::ostringstream s;
       s << "drone " << p.ids[i] << " disagrees with its matched detections: their best fit is " << sigma[i].yaw_step
         << " rad and " << sigma[i].position_step << " m away (limits " << p.max_yaw_sigma << " rad, "
         << p.max_position_sigma << " m)";
       return s.str();
     }
-    if (sigma[i].yaw > p.max_yaw_sigma || sigma[i].position > p.max_position_sigma) {
+    if (!(sigma[i].yaw <= p.max_yaw_sigma) || !(sigma[i].position <= p.max_position_sigma)) {
       std::ostringstream s;
       s << "drone " << p.ids[i] << " is too uncertain to certify: yaw sigma " << sigma[i].yaw << " rad (limit "
         << p.max_yaw_sigma << "), position sigma " << sigma[i].position << " m (limit " << p.max_position_sigma << ")";
@@ -166,7 +166,8 @@ std::string check_noise(const NoiseModel& n) {
       return s.str();
     }
   }
-  if (n.sigma(1.0) <= 0) return "noise: every term is 0, so no residual could be judged";
+  if (n.floor <= 0 && n.odometry <= 0)
+    return "noise: floor and odometry are both 0, so a detection's covariance would be singular along its ray";
   if (n.gate <= 0) return "noise.gate is 0 (must be > 0)";
   return "";
 }

@@ -28,20 +28,31 @@ std::string check_scalar(double v, const std::string& field) {
 
 bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
 
+// Larger distances (m) are not a drone swarm's and would overflow the estimator's arithmetic.
+constexpr double kMaxMetres = 1e4;
+
 // Names the first bad field of one observation ("" if none). Strings are built only on error.
 std::string check_observation(const Observation& obs, size_t o) {
-  if (finite(obs.odom_position) && std::isfinite(obs.odom_yaw) && finite(obs.vector) && obs.vector.norm() >= 1e-6)
+  if (finite(obs.odom_position) && std::isfinite(obs.odom_yaw) && finite(obs.vector) && obs.vector.norm() >= 1e-6 &&
+      obs.vector.norm() <= kMaxMetres && obs.odom_position.norm() <= kMaxMetres)
     return "";
   const std::string at = "observations[" + std::to_string(o) + "].";
   std::string e = check_vector(obs.odom_position, at + "odom_position");
   if (e.empty()) e = check_scalar(obs.odom_yaw, at + "odom_yaw");
   if (e.empty()) e = check_vector(obs.vector, at + "vector");
+  if (e.empty() && obs.odom_position.norm() > kMaxMetres)
+    e = at + "odom_position is " + number(obs.odom_position.norm()) + " m from the origin (more than " +
+        number(kMaxMetres) + " m)";
+  if (e.empty() && obs.vector.norm() > kMaxMetres)
+    e = at + "vector has length " + number(obs.vector.norm()) + " m (more than " + number(kMaxMetres) + " m)";
   if (e.empty()) e = at + "vector has length " + number(obs.vector.norm()) + " m (a detection must point somewhere)";
   return e;
 }
 
 std::string check_drone(const DroneRound& d) {
   std::string e = check_vector(d.position, "position");
+  if (e.empty() && d.position.norm() > kMaxMetres)
+    e = "position is " + number(d.position.norm()) + " m from the origin (more than " + number(kMaxMetres) + " m)";
   if (e.empty()) e = check_scalar(d.yaw, "yaw");
   for (size_t o = 0; e.empty() && o < d.observations.size(); ++o) e = check_observation(d.observations[o], o);
   return e;

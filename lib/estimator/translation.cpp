@@ -134,7 +134,10 @@ std::vector<PoseSigma> pose_uncertainty(int drones, int reference, const std::ve
     out[i].position = std::sqrt(std::max(0.0, P.selfadjointView<Eigen::Lower>().eigenvalues().maxCoeff()));
     out[i].yaw_step = std::abs(step(a));
     out[i].position_step = step.segment<3>(a + 1).norm();
-    if (ldlt.info() != Eigen::Success || !std::isfinite(out[i].yaw) || !std::isfinite(out[i].position))
+    // A singular H (an unobservable direction) must not read as zero uncertainty.
+    const bool singular = !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().cwiseAbs().maxCoeff());
+    if (ldlt.info() != Eigen::Success || singular || !std::isfinite(out[i].yaw) || !std::isfinite(out[i].position) ||
+        !std::isfinite(out[i].yaw_step) || !std::isfinite(out[i].position_step))
       out[i] = PoseSigma{INFINITY, INFINITY, INFINITY, INFINITY};
   }
   return out;
