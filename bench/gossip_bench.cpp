@@ -543,6 +543,7 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
         det.vector[1] = rel.norm() * std::sin(bearing);
         det.vector[2] = 0.0;
         det.confidence = 0.9f;
+        det.range = rel.norm();
         d.detections.push_back(det);
       }
       d.count = static_cast<int32_t>(d.detections.size());

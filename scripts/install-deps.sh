@@ -12,6 +12,8 @@ packages=(
   xvfb x11-apps                             # lcm-spy test under a virtual display (xwd screenshot)
   libsodium-dev                             # gossip authentication (crypto_auth)
   iproute2                                  # private network namespaces for udpm tests
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-dnn-dev  # detector, PNG I/O
+  python3-onnx python3-numpy                # tiny synthetic YOLO model, made at test time (/usr/bin/python3)
   libsdpa-dev libsdp-dev coinor-csdp        # SDP peers, benchmark only (never linked into lib/ or apps/)
 )
 missing=()

@@ -15,6 +15,7 @@
 #include "fact/swarm_rounds_t.hpp"
 #include "fact/truth_t.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -118,6 +119,7 @@ inline fact::detections_t detections(int64_t utime, int id) {
     d.vector[0] = 3.0 - t; d.vector[1] = 0.5 * t; d.vector[2] = -0.25;
     d.box[0] = 100.0f + t; d.box[1] = 80.0f; d.box[2] = 32.0f; d.box[3] = 24.0f;
     d.confidence = 0.75f;
+    d.range = std::sqrt(d.vector[0] * d.vector[0] + d.vector[1] * d.vector[1] + d.vector[2] * d.vector[2]);
     m.detections.push_back(d);
   }
   m.count = static_cast<int32_t>(m.detections.size());

@@ -384,6 +384,7 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
         det.vector[1] = 3 * std::sin(bearing);
         det.vector[2] = 0.1 * track - 1.0;
         det.confidence = 0.9f;
+        det.range = std::hypot(3.0, det.vector[2]);
         d.detections.push_back(det);
         local.add_detection(d.utime, track, Eigen::Vector3d(det.vector[0], det.vector[1], det.vector[2]));
       }

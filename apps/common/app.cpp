@@ -153,8 +153,8 @@ bool counts_fit(const fact::app_status_t*, const void* data, int size) {
 }
 bool counts_fit(const fact::detections_t*, const void* data, int size) {
   Wire w(data, size);
-  int32_t n = 0;  // detection_t: track_id, vector[3], box[4] (float), confidence (float)
-  return w.skip(8 + 8 + 4 + 8) && w.count(&n, 4 + 24 + 16 + 4);
+  int32_t n = 0;  // detection_t: track_id, vector[3], box[4] (float), confidence (float), range
+  return w.skip(8 + 8 + 4 + 8) && w.count(&n, 4 + 24 + 16 + 4 + 8);
 }
 bool counts_fit(const fact::frame_t*, const void* data, int size) {
   Wire w(data, size);
