@@ -1,7 +1,10 @@
 #include "common/app.h"
 
 #include "fact/app_status_t.hpp"
+#include "fact/sim_clock_t.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -12,9 +15,40 @@
 
 namespace fact::app {
 
+namespace {
+std::atomic<bool> g_sim_clock{false};
+std::atomic<int64_t> g_sim_now{0};
+
+void on_sim_clock(const lcm::ReceiveBuffer* rbuf, const std::string&, void*) {
+  fact::sim_clock_t tick;
+  if (!rbuf || !decode_error(rbuf->data, static_cast<int>(rbuf->data_size), &tick).empty()) return;
+  int64_t seen = g_sim_now.load();
+  while (tick.utime > seen && !g_sim_now.compare_exchange_weak(seen, tick.utime)) {
+  }
+}
+}  // namespace
+
 int64_t now_us() {
+  if (g_sim_clock.load()) return g_sim_now.load();
   using namespace std::chrono;
   return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+void follow_sim_clock(lcm::LCM& lcm, const std::string& channel) {
+  lcm.subscribeFunction(channel, &on_sim_clock, static_cast<void*>(nullptr));
+  g_sim_clock = true;
+}
+
+bool following_sim_clock() { return g_sim_clock.load(); }
+
+bool wait_for_sim_clock(lcm::LCM& lcm, int timeout_ms) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (g_sim_now.load() == 0 && !stop_requested()) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    if (lcm.handleTimeout(static_cast<int>(std::min<int64_t>(left.count(), 100))) < 0 && errno != EINTR) return false;
+  }
+  return g_sim_now.load() != 0;
 }
 
 std::string channel(const std::string& base, int drone_id) {

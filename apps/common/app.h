@@ -25,8 +25,18 @@
 
 namespace fact::app {
 
-// Wall-clock time in microseconds since the Unix epoch (the LCM utime convention).
+// The time every app reads, in microseconds (the LCM utime convention): the wall clock since the
+// Unix epoch, or, after follow_sim_clock(), the simulator's clock.
 int64_t now_us();
+
+// Switches now_us() to the simulation clock: fact::sim_clock_t ticks on `channel` (from fact-sim).
+// now_us() then returns the newest simulated time received (it never goes back; 0 before the
+// first tick). Undecodable ticks are ignored. Call once, before the app's loop.
+void follow_sim_clock(lcm::LCM& lcm, const std::string& channel);
+bool following_sim_clock();
+// Handles LCM messages until the first simulation tick arrives: true, or false after timeout_ms
+// (or a stop request) without one.
+bool wait_for_sim_clock(lcm::LCM& lcm, int timeout_ms);
 
 // Per-drone channel name: channel("FACT_ODOMETRY", 3) == "FACT_ODOMETRY_3".
 // A negative drone id means "not per drone" and returns base unchanged.

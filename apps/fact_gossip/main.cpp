@@ -10,6 +10,7 @@
 // FACT_GOSSIP (gossip_packet_t). Publishes: FACT_GOSSIP, FACT_SWARM_ROUNDS_<id>, FACT_STATUS.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.
 #include "common/app.h"
+#include "common/flags.h"
 #include "common/convert.h"
 #include "fact/detections_t.hpp"
 #include "fact/gossip.h"
@@ -37,8 +38,7 @@ using fact::app::now_us;
 
 // Every parameter, with its unit, in one place.
 struct Flags {
-  int drone_id = -1;
-  std::string lcm_url;                      // "" = LCM's default ($LCM_DEFAULT_URL)
+  fact::app::CommonFlags common;            // --drone-id (required), --lcm-url, status, --sim-clock
   std::string key_file;                     // swarm key: 32 raw bytes or 64 hex digits
   bool insecure = false;                    // no key: zero macs, nothing checked
   std::vector<int> roster;                  // the swarm's ids (empty: any id 0 … max_drone_id)
@@ -64,8 +64,6 @@ struct Flags {
   std::string odometry_channel;             // default FACT_ODOMETRY_<id>
   std::string round_channel;                // default FACT_ROUND_PACKET_<id>
   std::string output_channel;               // default FACT_SWARM_ROUNDS_<id>
-  std::string status_channel = "FACT_STATUS";
-  double status_period = 1.0;               // s
 };
 
 int64_t us(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e6)); }
@@ -83,12 +81,12 @@ class GossipApp {
       : f_(f),
         key_(key),
         lcm_(lcm),
-        log_("fact-gossip", f.drone_id),
-        status_(lcm, f.status_channel, "fact-gossip", f.drone_id),
+        log_("fact-gossip", f.common.drone_id),
+        status_(lcm, f.common.status_channel, "fact-gossip", f.common.drone_id),
         gossip_(go, start),
         builder_(bo),
         seq_(start) {
-    status_.set_period_us(us(f.status_period));
+    status_.set_period_us(us(f.common.status_period));
   }
 
   void subscribe() {
@@ -151,7 +149,7 @@ class GossipApp {
         kind = fact::gossip_packet_t::REQUEST;
         break;
     }
-    const fact::gossip_packet_t env = fact::app::make_envelope(f_.drone_id, seq_++, kind, std::move(payload), now, key_);
+    const fact::gossip_packet_t env = fact::app::make_envelope(f_.common.drone_id, seq_++, kind, std::move(payload), now, key_);
     const int size = env.getEncodedSize();
     if (lcm_->publish(f_.gossip_channel, &env) != 0) {
       reject("publish_failed", "publishing on " + f_.gossip_channel + " failed");
@@ -166,7 +164,7 @@ class GossipApp {
     if (!c.ready || (c.rounds == published_rounds_ && c.drones == published_drones_)) return;
     fact::swarm_rounds_t m;
     m.utime = now;
-    m.drone_id = f_.drone_id;
+    m.drone_id = f_.common.drone_id;
     m.complete_rounds = c.rounds;
     m.num_drones = static_cast<int32_t>(c.drones.size());
     m.drone_ids.assign(c.drones.begin(), c.drones.end());
@@ -207,7 +205,7 @@ class GossipApp {
     fact::gossip_packet_t env;
     if (!fact::app::decode(rbuf, chan, &env, &status_, log_)) return;
     const int64_t now = now_us();
-    if (env.sender_id == f_.drone_id) return;  // our own packet, looped back by multicast
+    if (env.sender_id == f_.common.drone_id) return;  // our own packet, looped back by multicast
     if (env.payload_size < 0 || static_cast<size_t>(env.payload_size) != env.payload.size()) {
       reject("undecodable", "envelope from drone " + std::to_string(env.sender_id) + ": payload_size " +
                                 std::to_string(env.payload_size) + " ≠ payload bytes");
@@ -285,7 +283,7 @@ class GossipApp {
   void on_odometry(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
     fact::odometry_t m;
     if (!fact::app::decode(rbuf, chan, &m, &status_, log_)) return;
-    if (m.drone_id != f_.drone_id)
+    if (m.drone_id != f_.common.drone_id)
       return reject("foreign_drone", "odometry of drone " + std::to_string(m.drone_id) + " on " + chan + " ignored");
     const std::string e = builder_.add_odometry(m.utime, Eigen::Vector3d(m.position[0], m.position[1], m.position[2]), m.yaw);
     if (!e.empty()) status_.note(e);
@@ -294,7 +292,7 @@ class GossipApp {
   void on_detections(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
     fact::detections_t m;
     if (!fact::app::decode(rbuf, chan, &m, &status_, log_)) return;
-    if (m.drone_id != f_.drone_id)
+    if (m.drone_id != f_.common.drone_id)
       return reject("foreign_drone", "detections of drone " + std::to_string(m.drone_id) + " on " + chan + " ignored");
     for (const auto& d : m.detections) {
       const std::string e = builder_.add_detection(m.utime, d.track_id, Eigen::Vector3d(d.vector[0], d.vector[1], d.vector[2]));
@@ -322,8 +320,7 @@ int main(int argc, char** argv) {
   Flags f;
   CLI::App cli{"fact-gossip: exchanges this drone's round packets with the swarm until every drone holds the same "
                "complete data; publishes it as swarm_rounds_t."};
-  cli.add_option("--drone-id", f.drone_id, "This drone's id (>= 0)")->required();
-  cli.add_option("--lcm-url", f.lcm_url, "LCM URL (default: LCM's default, $LCM_DEFAULT_URL)");
+  fact::app::add_common_flags(cli, &f.common, fact::app::DroneIdFlag::required);
   cli.add_option("--key-file", f.key_file,
                  "Swarm key: a file of exactly 32 raw bytes or 64 hex digits (whitespace ignored); required unless "
                  "--insecure")->type_name("FILE");
@@ -363,8 +360,6 @@ int main(int argc, char** argv) {
   cli.add_option("--odometry-channel", f.odometry_channel, "Default FACT_ODOMETRY_<id>");
   cli.add_option("--round-channel", f.round_channel, "Default FACT_ROUND_PACKET_<id> (with --rounds-from-channel)");
   cli.add_option("--output-channel", f.output_channel, "Default FACT_SWARM_ROUNDS_<id>");
-  cli.add_option("--status-channel", f.status_channel, "app_status_t heartbeat channel")->capture_default_str();
-  cli.add_option("--status-period", f.status_period, "s between status messages")->capture_default_str();
   cli.footer(
       "A round is one spin: it closes when the odometry yaw (unwrapped) has turned --spin-angle since the previous "
       "round; one observation per tracked drone (the detection nearest the image centre, with the odometry "
@@ -376,15 +371,17 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;
   }
-  fact::app::Log boot("fact-gossip", f.drone_id);
-  if (f.drone_id < 0) {
-    boot.event("--drone-id must be >= 0, got " + std::to_string(f.drone_id));
+  fact::app::Log boot("fact-gossip", f.common.drone_id);
+  try {
+    fact::app::check_common_flags(f.common, fact::app::DroneIdFlag::required);
+  } catch (const fact::app::FlagError& e) {
+    boot.event(std::string("error: ") + e.what());
     return 2;
   }
-  if (f.detections_channel.empty()) f.detections_channel = channel("FACT_DETECTIONS", f.drone_id);
-  if (f.odometry_channel.empty()) f.odometry_channel = channel("FACT_ODOMETRY", f.drone_id);
-  if (f.round_channel.empty()) f.round_channel = channel("FACT_ROUND_PACKET", f.drone_id);
-  if (f.output_channel.empty()) f.output_channel = channel("FACT_SWARM_ROUNDS", f.drone_id);
+  if (f.detections_channel.empty()) f.detections_channel = channel("FACT_DETECTIONS", f.common.drone_id);
+  if (f.odometry_channel.empty()) f.odometry_channel = channel("FACT_ODOMETRY", f.common.drone_id);
+  if (f.round_channel.empty()) f.round_channel = channel("FACT_ROUND_PACKET", f.common.drone_id);
+  if (f.output_channel.empty()) f.output_channel = channel("FACT_SWARM_ROUNDS", f.common.drone_id);
 
   fact::app::SwarmKey key;
   if (std::string e = fact::app::init_crypto(); !e.empty()) {
@@ -405,14 +402,14 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  for (double v : {f.summary_period, f.silence_timeout, f.request_interval, f.status_period})
+  for (double v : {f.summary_period, f.silence_timeout, f.request_interval})
     if (!(v > 0) || !std::isfinite(v)) {
       boot.event("periods and timeouts must be > 0 s");
       return 2;
     }
 
   fact::gossip::Options go;
-  go.self_id = f.drone_id;
+  go.self_id = f.common.drone_id;
   go.roster = f.roster;
   go.max_drone_id = f.max_drone_id;
   go.summary_period_us = us(f.summary_period);
@@ -441,12 +438,13 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  lcm::LCM lcm(f.lcm_url);
+  lcm::LCM lcm(f.common.lcm_url);
   if (!lcm.good()) {
-    boot.event("LCM is not usable with URL '" + f.lcm_url + "' (bad URL, or no multicast route for udpm)");
+    boot.event("LCM is not usable with URL '" + f.common.lcm_url + "' (bad URL, or no multicast route for udpm)");
     return 1;
   }
   fact::app::install_stop_handler();
+  if (!fact::app::start_clock(lcm, f.common, boot)) return 1;
   const int64_t start = now_us();
   GossipApp app(f, go, bo, key, &lcm, start);
   app.subscribe();

@@ -18,6 +18,7 @@
 #include "common/app.h"
 #include "common/convert.h"
 #include "common/estimator_flags.h"
+#include "common/flags.h"
 #include "fact/estimator.h"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
@@ -39,12 +40,9 @@ constexpr const char* kApp = "fact-solver";
 
 // Every parameter of the app, with its unit.
 struct Options {
-  int drone_id = 0;                   // this drone's id (≥ 0)
-  std::string lcm_url;                // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL)
+  fact::app::CommonFlags common;      // --drone-id (default 0), --lcm-url, status, --sim-clock
   std::string rounds_channel;         // input; empty = FACT_SWARM_ROUNDS_<id>
   std::string result_channel;         // output; empty = FACT_RESULT_<id>
-  std::string status_channel = "FACT_STATUS";
-  double status_period = 1.0;         // s between status messages (> 0)
   int max_complete_rounds = 1000;     // a message claiming more complete rounds is rejected (bad input)
   bool publish_solve_time = false;    // fill swarm_result_t.solve_us (breaks bit-identity across drones)
   // Estimator options (mode, rounds, reference, noise model, certification limits), the same
@@ -52,25 +50,14 @@ struct Options {
   fact::app::EstimatorFlags estimator;
 };
 
-struct FlagError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using fact::app::FlagError;
 
 void add_flags(CLI::App& app, Options& o) {
-  app.add_option("--drone-id", o.drone_id, "This drone's id (>= 0); names the default channels")
-      ->type_name("ID")
-      ->capture_default_str();
-  app.add_option("--lcm-url", o.lcm_url, "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: LCM's default)")
-      ->type_name("URL");
+  o.common.drone_id = 0;
+  fact::app::add_common_flags(app, &o.common, fact::app::DroneIdFlag::optional);
   app.add_option("--rounds-channel", o.rounds_channel, "Input channel (default FACT_SWARM_ROUNDS_<id>)")
       ->type_name("CHANNEL");
   app.add_option("--result-channel", o.result_channel, "Output channel (default FACT_RESULT_<id>)")->type_name("CHANNEL");
-  app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")
-      ->type_name("CHANNEL")
-      ->capture_default_str();
-  app.add_option("--status-period", o.status_period, "Seconds between status messages (> 0)")
-      ->type_name("S")
-      ->capture_default_str();
   app.add_option("--max-complete-rounds", o.max_complete_rounds,
                  "Reject a message claiming more complete rounds than this (>= 1)")
       ->type_name("K")
@@ -90,20 +77,11 @@ void add_flags(CLI::App& app, Options& o) {
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 1 LCM failed; 2 bad flags.");
 }
 
-void check_positive(const char* flag, double value) {
-  if (std::isfinite(value) && value > 0) return;
-  std::ostringstream s;
-  s << flag << ": expected a finite number > 0, got " << value;
-  throw FlagError(s.str());
-}
-
 // Checks the flags and derives the estimator's options.
 fact::EstimateOptions check(Options& o) {
-  if (o.drone_id < 0) throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(o.drone_id));
-  if (o.rounds_channel.empty()) o.rounds_channel = fact::app::channel("FACT_SWARM_ROUNDS", o.drone_id);
-  if (o.result_channel.empty()) o.result_channel = fact::app::channel("FACT_RESULT", o.drone_id);
-  if (o.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
-  check_positive("--status-period", o.status_period);
+  fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::optional);
+  if (o.rounds_channel.empty()) o.rounds_channel = fact::app::channel("FACT_SWARM_ROUNDS", o.common.drone_id);
+  if (o.result_channel.empty()) o.result_channel = fact::app::channel("FACT_RESULT", o.common.drone_id);
   if (o.max_complete_rounds < 1)
     throw FlagError("--max-complete-rounds: expected >= 1, got " + std::to_string(o.max_complete_rounds));
   try {
@@ -126,9 +104,9 @@ class Solver {
       : lcm_(lcm),
         options_(o),
         estimate_options_(e),
-        log_(kApp, o.drone_id),
-        status_(&lcm, o.status_channel, kApp, o.drone_id) {
-    status_.set_period_us(static_cast<int64_t>(std::llround(o.status_period * 1e6)));
+        log_(kApp, o.common.drone_id),
+        status_(&lcm, o.common.status_channel, kApp, o.common.drone_id) {
+    status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
     status_.set_state("waiting for rounds");
     // Counters the status shows from the start, so a reader sees zeros rather than nothing.
     for (const char* name : {"messages", "undecodable", "invalid_input", "stale", "estimates", "results_published",
@@ -140,9 +118,9 @@ class Solver {
     status_.count("messages");
     fact::swarm_rounds_t msg;
     if (!fact::app::decode(rbuf, channel, &msg, &status_, log_)) return;
-    if (msg.drone_id != options_.drone_id) {
+    if (msg.drone_id != options_.common.drone_id) {
       reject("swarm_rounds from drone " + std::to_string(msg.drone_id) + " on " + channel + " (this is drone " +
-             std::to_string(options_.drone_id) + ")");
+             std::to_string(options_.common.drone_id) + ")");
       return;
     }
     if (msg.complete_rounds < 1 || msg.complete_rounds > options_.max_complete_rounds) {
@@ -199,7 +177,7 @@ class Solver {
     const auto start = std::chrono::steady_clock::now();
     const fact::Estimate e = fact::estimate_poses(p.rounds, estimate_options_);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    fact::swarm_result_t result = fact::app::result_to_message(e, options_.drone_id, p.utime);
+    fact::swarm_result_t result = fact::app::result_to_message(e, options_.common.drone_id, p.utime);
     if (!options_.publish_solve_time) result.solve_us = 0;
     estimated_rounds_ = p.complete_rounds;
     status_.count("estimates");
@@ -258,13 +236,14 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  const fact::app::Log log(kApp, options.drone_id);
-  lcm::LCM lcm(options.lcm_url);
+  const fact::app::Log log(kApp, options.common.drone_id);
+  lcm::LCM lcm(options.common.lcm_url);
   if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (options.lcm_url.empty() ? std::string() : " at " + options.lcm_url));
+    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
     return 1;
   }
   fact::app::install_stop_handler();
+  if (!fact::app::start_clock(lcm, options.common, log)) return 1;
   Solver solver(lcm, options, estimate_options);
   lcm.subscribe(options.rounds_channel, &Solver::on_rounds, &solver);
   log.event("listening on " + options.rounds_channel + ", publishing on " + options.result_channel + " (mode " +

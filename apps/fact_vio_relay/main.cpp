@@ -18,6 +18,7 @@
 // Exit codes: 0 end of the TUM file, or stopped by SIGINT/SIGTERM; 1 LCM, the socket or the file
 // failed while running; 2 bad flags or an unreadable --file.
 #include "common/app.h"
+#include "common/flags.h"
 #include "fact/odometry_filter.h"
 #include "fact/odometry_t.hpp"
 
@@ -50,13 +51,10 @@ constexpr int kInputQueue = 1000;  // lcm source: messages LCM may hold for the 
 
 // Every parameter of the app, with its unit.
 struct Options {
-  int drone_id = 0;                     // this drone's id (≥ 0)
+  fact::app::CommonFlags common;        // --drone-id (default 0), --lcm-url, status, --sim-clock
   std::string source = "lcm";           // lcm | tum | udp
-  std::string lcm_url;                  // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL)
   std::string input_channel;            // lcm source; empty = FACT_VIO_RAW_<id>
   std::string output_channel;           // empty = FACT_ODOMETRY_<id>
-  std::string status_channel = "FACT_STATUS";
-  double status_period = 1.0;           // s between status messages (> 0)
   std::string file;                     // tum source: the trajectory file
   double rate = 1.0;                    // tum source: replay speed, × real time; 0 = as fast as possible
   int port = 0;                         // udp source: port to listen on (1 … 65535)
@@ -65,29 +63,19 @@ struct Options {
   fact::OdometryFilterOptions filter;   // max_speed (m/s), max_yaw_rate (rad/s)
 };
 
-struct FlagError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using fact::app::check_positive;
+using fact::app::FlagError;
 
 void add_flags(CLI::App& app, Options& o) {
-  app.add_option("--drone-id", o.drone_id, "This drone's id (>= 0); names the default channels")
-      ->type_name("ID")
-      ->capture_default_str();
+  o.common.drone_id = 0;
+  fact::app::add_common_flags(app, &o.common, fact::app::DroneIdFlag::optional);
   app.add_option("--source", o.source, "Where odometry comes from: lcm, tum or udp")
       ->type_name("SOURCE")
       ->capture_default_str();
-  app.add_option("--lcm-url", o.lcm_url, "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: LCM's default)")
-      ->type_name("URL");
   app.add_option("--input-channel", o.input_channel, "lcm source: raw odometry channel (default FACT_VIO_RAW_<id>)")
       ->type_name("CHANNEL");
   app.add_option("--output-channel", o.output_channel, "Output channel (default FACT_ODOMETRY_<id>)")
       ->type_name("CHANNEL");
-  app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")
-      ->type_name("CHANNEL")
-      ->capture_default_str();
-  app.add_option("--status-period", o.status_period, "Seconds between status messages (> 0)")
-      ->type_name("S")
-      ->capture_default_str();
   app.add_option("--file", o.file, "tum source: the TUM trajectory file to replay")->type_name("FILE");
   app.add_option("--rate", o.rate, "tum source: replay speed, x real time (0 = as fast as possible)")
       ->type_name("X")
@@ -122,20 +110,13 @@ void add_flags(CLI::App& app, Options& o) {
       "2 bad flags or unreadable --file.");
 }
 
-void check_positive(const char* flag, double value) {
-  if (std::isfinite(value) && value > 0) return;
-  std::ostringstream s;
-  s << flag << ": expected a finite number > 0, got " << value;
-  throw FlagError(s.str());
-}
-
 void only_for(const CLI::App& app, const char* flag, const std::string& source, const Options& o) {
   if (app.count(flag) > 0 && o.source != source)
     throw FlagError(std::string(flag) + " is only for --source " + source + " (the source is " + o.source + ")");
 }
 
 void check(const CLI::App& app, Options& o) {
-  if (o.drone_id < 0) throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(o.drone_id));
+  fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::optional);
   if (o.source != "lcm" && o.source != "tum" && o.source != "udp")
     throw FlagError("--source: expected lcm, tum or udp, got \"" + o.source + "\"");
   only_for(app, "--input-channel", "lcm", o);
@@ -144,14 +125,12 @@ void check(const CLI::App& app, Options& o) {
   only_for(app, "--port", "udp", o);
   only_for(app, "--bind", "udp", o);
   if (o.restamp && o.source == "lcm") throw FlagError("--restamp is only for --source tum or udp");
-  if (o.input_channel.empty()) o.input_channel = fact::app::channel("FACT_VIO_RAW", o.drone_id);
-  if (o.output_channel.empty()) o.output_channel = fact::app::channel("FACT_ODOMETRY", o.drone_id);
-  if (o.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
+  if (o.input_channel.empty()) o.input_channel = fact::app::channel("FACT_VIO_RAW", o.common.drone_id);
+  if (o.output_channel.empty()) o.output_channel = fact::app::channel("FACT_ODOMETRY", o.common.drone_id);
   if (o.source == "lcm" && o.input_channel == o.output_channel)
     throw FlagError("--input-channel and --output-channel are both " + o.output_channel + " (the relay would feed itself)");
-  if (o.output_channel == o.status_channel)
+  if (o.output_channel == o.common.status_channel)
     throw FlagError("--output-channel and --status-channel are both " + o.output_channel);
-  check_positive("--status-period", o.status_period);
   check_positive("--max-speed", o.filter.max_speed);
   check_positive("--max-yaw-rate", o.filter.max_yaw_rate);
   if (o.source == "tum") {
@@ -173,10 +152,10 @@ class Relay {
   Relay(lcm::LCM& lcm, const Options& options)
       : lcm_(lcm),
         options_(options),
-        log_(kApp, options.drone_id),
-        status_(&lcm, options.status_channel, kApp, options.drone_id),
+        log_(kApp, options.common.drone_id),
+        status_(&lcm, options.common.status_channel, kApp, options.common.drone_id),
         filter_(options.filter) {
-    status_.set_period_us(static_cast<int64_t>(std::llround(options.status_period * 1e6)));
+    status_.set_period_us(static_cast<int64_t>(std::llround(options.common.status_period * 1e6)));
     // Every counter from the start, so that a reader sees zeros rather than missing names.
     status_.count("published", 0);
     for (fact::Rejection r : {fact::Rejection::non_finite, fact::Rejection::out_of_order, fact::Rejection::jump,
@@ -204,7 +183,7 @@ class Relay {
                   fact::odometry_t::getTypeName() + "): " + error);
       return;
     }
-    if (m.drone_id != options_.drone_id) {
+    if (m.drone_id != options_.common.drone_id) {
       status_.count("wrong_drone_id");
       limited("wrong_drone_id", now, "dropped a message on " + channel + " from drone " + std::to_string(m.drone_id));
       return;
@@ -271,7 +250,7 @@ class Relay {
     }
     fact::odometry_t m;
     m.utime = r.output.utime;
-    m.drone_id = options_.drone_id;
+    m.drone_id = options_.common.drone_id;
     m.seq = r.output.seq;
     for (int k = 0; k < 3; ++k) {
       m.position[k] = r.output.position[k];
@@ -432,7 +411,7 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  const fact::app::Log log(kApp, options.drone_id);
+  const fact::app::Log log(kApp, options.common.drone_id);
   // The source first: a file that cannot be read is bad input (2), before any LCM traffic.
   std::ifstream file;
   if (options.source == "tum") {
@@ -462,13 +441,17 @@ int main(int argc, char** argv) {
     }
   }
 
-  lcm::LCM lcm(options.lcm_url);
+  lcm::LCM lcm(options.common.lcm_url);
   if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (options.lcm_url.empty() ? std::string() : " at " + options.lcm_url));
+    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
     if (sock >= 0) close(sock);
     return 1;
   }
   fact::app::install_stop_handler();
+  if (!fact::app::start_clock(lcm, options.common, log)) {
+    if (sock >= 0) close(sock);
+    return 1;
+  }
   Relay relay(lcm, options);
   std::ostringstream start;
   start << "source " << options.source;

@@ -1,0 +1,59 @@
+#include "common/flags.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace fact::app {
+
+void add_common_flags(CLI::App& cli, CommonFlags* f, DroneIdFlag drone_id) {
+  auto* id = cli.add_option("--drone-id", f->drone_id, "This drone's id (>= 0); names the default channels")
+                 ->type_name("ID");
+  if (drone_id == DroneIdFlag::required)
+    id->required();
+  else
+    id->capture_default_str();
+  cli.add_option("--lcm-url", f->lcm_url, "LCM URL, e.g. udpm://239.255.76.67:7667?ttl=0 (default: LCM's default)")
+      ->type_name("URL");
+  cli.add_option("--status-channel", f->status_channel, "Status heartbeat channel (fact::app_status_t)")
+      ->type_name("CHANNEL")
+      ->capture_default_str();
+  cli.add_option("--status-period", f->status_period, "Seconds between status messages (> 0)")
+      ->type_name("S")
+      ->capture_default_str();
+  cli.add_flag("--sim-clock", f->sim_clock,
+               "Take time from the simulator's clock (fact::sim_clock_t on --clock-channel) instead of the wall "
+               "clock; waits for its first tick");
+  cli.add_option("--clock-channel", f->clock_channel, "Simulation clock channel")
+      ->type_name("CHANNEL")
+      ->capture_default_str();
+}
+
+void check_positive(const char* flag, double value) {
+  if (std::isfinite(value) && value > 0) return;
+  std::ostringstream s;
+  s << flag << ": expected a finite number > 0, got " << value;
+  throw FlagError(s.str());
+}
+
+void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id) {
+  (void)drone_id;
+  if (f.drone_id < 0)
+    throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id));
+  if (f.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
+  check_positive("--status-period", f.status_period);
+  if (f.sim_clock && f.clock_channel.empty()) throw FlagError("--clock-channel: expected a channel name, got \"\"");
+}
+
+bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeout_ms) {
+  if (!f.sim_clock) return true;
+  follow_sim_clock(lcm, f.clock_channel);
+  log.event("waiting for the simulation clock on " + f.clock_channel);
+  if (wait_for_sim_clock(lcm, timeout_ms)) {
+    log.event("simulation clock at " + std::to_string(now_us()) + " us");
+    return true;
+  }
+  log.event("error: no simulation clock tick on " + f.clock_channel + " within " + std::to_string(timeout_ms) + " ms");
+  return false;
+}
+
+}  // namespace fact::app
