@@ -11,6 +11,7 @@
 #include "fact/odometry_t.hpp"
 #include "fact/round_packet_t.hpp"
 #include "fact/setpoint_t.hpp"
+#include "fact/sim_clock_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 #include "fact/truth_t.hpp"
@@ -45,6 +46,13 @@ inline fact::setpoint_t setpoint(int64_t utime, int id) {
   }
   m.yaw = -1.0;
   m.yaw_rate = 0.3;
+  return m;
+}
+
+inline fact::sim_clock_t sim_clock(int64_t utime) {
+  fact::sim_clock_t m;
+  m.utime = utime;
+  m.rate = 2.5;
   return m;
 }
 

@@ -1,0 +1,488 @@
+// fact-sim: the simulated swarm. One process plays N drones in a room with obstacles
+// (lib/sim: world, dynamics + simulated flight controller, VIO drift, CPU renderer) and publishes,
+// on a simulation clock:
+//   FACT_FRAMES_<id>     fact::frame_t      gray + depth (mm) of each drone's camera, --camera-rate
+//   FACT_VIO_RAW_<id>    fact::odometry_t   raw VIO in f_i with IMU roll/pitch, --odometry-rate
+//   FACT_TRUTH           fact::truth_t      ground truth (evaluation only), --truth-rate
+//   FACT_SIM_CLOCK       fact::sim_clock_t  simulation time, every physics batch (10 ms)
+//   FACT_STATUS          fact::app_status_t heartbeat and counters
+// and follows fact::setpoint_t on FACT_SETPOINT_<id> (or a --script). Every message carries the
+// simulation time in utime; it starts at --epoch-utime, so runs are reproducible.
+//
+// Exit codes: 0 at --duration or on SIGINT/SIGTERM; 1 LCM failure; 2 bad flags or world file.
+#include "common/app.h"
+#include "fact/frame_t.hpp"
+#include "fact/odometry_t.hpp"
+#include "fact/setpoint_t.hpp"
+#include "fact/sim_clock_t.hpp"
+#include "fact/sim_dynamics.h"
+#include "fact/sim_render.h"
+#include "fact/truth_t.hpp"
+#include "fact/world_io.h"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+constexpr const char* kApp = "fact-sim";
+constexpr int64_t kPhysicsStepUs = 2000;   // physics step (µs of sim time)
+constexpr int64_t kBatchUs = 10000;        // clock tick, message handling and pacing every 10 ms
+constexpr double kProgressEveryS = 5.0;    // progress log period (sim s)
+
+struct Options {
+  std::string world_file;           // "" = the built-in default world
+  int drones = 0;                   // 0 = the world's count
+  uint64_t seed = 1;
+  double rate = 1.0;                // real-time factor; 0 = as fast as possible
+  double duration = 0;              // sim s; 0 = forever
+  double camera_rate = 15;          // Hz
+  double odometry_rate = 100;       // Hz
+  double truth_rate = 10;           // Hz
+  std::string resolution = "424x240";
+  std::string script = "none";
+  double spin_rate = 0.8;           // rad/s
+  int64_t epoch_utime = 1700000000000000;
+  std::string lcm_url;
+  std::string frames_channel = "FACT_FRAMES";
+  std::string vio_channel = "FACT_VIO_RAW";
+  std::string setpoint_channel = "FACT_SETPOINT";
+  std::string truth_channel = "FACT_TRUTH";
+  std::string clock_channel = "FACT_SIM_CLOCK";
+  std::string status_channel = "FACT_STATUS";
+  bool no_depth_noise = false;
+};
+
+struct FlagError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void add_flags(CLI::App& app, Options& o) {
+  app.add_option("--world", o.world_file, "fact-world-v1 JSON world file (default: the built-in default world)")
+      ->type_name("FILE");
+  app.add_option("--drones", o.drones, "Number of drones (overrides the world's count; 1-64)")->type_name("N");
+  app.add_option("--seed", o.seed, "Seed of every random choice (starts, heights, drift, noise)")->capture_default_str();
+  app.add_option("--rate", o.rate, "Real-time factor (1 = real time, 0 = as fast as possible)")->capture_default_str();
+  app.add_option("--duration", o.duration, "Simulated seconds to run (0 = until SIGINT/SIGTERM)")
+      ->type_name("S")->capture_default_str();
+  app.add_option("--camera-rate", o.camera_rate, "Frames per second per drone (Hz)")->capture_default_str();
+  app.add_option("--odometry-rate", o.odometry_rate, "VIO odometry rate per drone (Hz)")->capture_default_str();
+  app.add_option("--truth-rate", o.truth_rate, "Ground-truth rate (Hz)")->capture_default_str();
+  app.add_option("--resolution", o.resolution, "Camera resolution: 424x240 or 640x480")->capture_default_str();
+  app.add_option("--script", o.script, "Scripted motion: none, hover or spin")->capture_default_str();
+  app.add_option("--spin-rate", o.spin_rate, "Yaw rate of --script spin (rad/s, at most 1.5)")->capture_default_str();
+  app.add_option("--epoch-utime", o.epoch_utime, "Simulation time at start (us)")->capture_default_str();
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: LCM's default)")->type_name("URL");
+  app.add_option("--frames-channel", o.frames_channel, "Frame channel base (+ _<id>)")->capture_default_str();
+  app.add_option("--vio-channel", o.vio_channel, "Raw VIO odometry channel base (+ _<id>)")->capture_default_str();
+  app.add_option("--setpoint-channel", o.setpoint_channel, "Setpoint channel base (+ _<id>)")->capture_default_str();
+  app.add_option("--truth-channel", o.truth_channel, "Ground-truth channel")->capture_default_str();
+  app.add_option("--clock-channel", o.clock_channel, "Simulation clock channel")->capture_default_str();
+  app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")->capture_default_str();
+  app.add_flag("--no-depth-noise", o.no_depth_noise, "Publish noise-free (quantised) depth");
+  app.footer(
+      "Without --world the built-in default world is used (room 10x10x4 m, a box, a cylinder and a\n"
+      "polytope, drones at random starts). Drones hold their start pose until their first setpoint\n"
+      "(fact::setpoint_t in f_i on <setpoint-channel>_<id>) or a --script: hover takes off to a seeded\n"
+      "height in the world's drones.height range; spin then yaws at --spin-rate. NaN setpoints and\n"
+      "setpoints for another drone are counted, logged and ignored.\n"
+      "Exit codes: 0 at --duration or SIGINT/SIGTERM; 1 LCM failure; 2 bad flags or world file.");
+}
+
+void check_rate(const char* flag, double v, bool zero_ok) {
+  if (std::isfinite(v) && (v > 0 || (zero_ok && v == 0))) return;
+  throw FlagError(std::string(flag) + ": expected a finite number " + (zero_ok ? ">= 0" : "> 0") + ", got " +
+                  std::to_string(v));
+}
+
+fact::CameraIntrinsics parse_resolution(const std::string& r) {
+  if (r == "424x240") return fact::d430_424x240();
+  if (r == "640x480") return fact::d430_640x480();
+  throw FlagError("--resolution: expected 424x240 or 640x480, got \"" + r + "\"");
+}
+
+void check(const Options& o) {
+  check_rate("--rate", o.rate, true);
+  check_rate("--duration", o.duration, true);
+  check_rate("--camera-rate", o.camera_rate, false);
+  check_rate("--odometry-rate", o.odometry_rate, false);
+  check_rate("--truth-rate", o.truth_rate, false);
+  check_rate("--spin-rate", o.spin_rate, false);
+  if (o.spin_rate > 1.5) throw FlagError("--spin-rate: at most the yaw-rate limit 1.5 rad/s, got " + std::to_string(o.spin_rate));
+  if (o.drones < 0 || o.drones > 64) throw FlagError("--drones: expected 1 ... 64, got " + std::to_string(o.drones));
+  fact::sim::Script s;
+  if (!fact::sim::parse_script(o.script, &s)) throw FlagError("--script: expected none, hover or spin, got \"" + o.script + "\"");
+  parse_resolution(o.resolution);
+  for (const std::string* c : {&o.frames_channel, &o.vio_channel, &o.setpoint_channel, &o.truth_channel,
+                               &o.clock_channel, &o.status_channel})
+    if (c->empty()) throw FlagError("a channel flag is empty");
+}
+
+// The world with its starts placed; throws fact::FormatError (bad file) or FlagError.
+fact::sim::World load_world(const Options& o) {
+  using fact::sim::World;
+  World w = o.world_file.empty() ? fact::sim::default_world(o.drones > 0 ? o.drones : 4, o.seed)
+                                 : fact::read_world_file(o.world_file);
+  fact::sim::DroneConfig& c = w.drone_config;
+  if (o.drones > 0 && o.drones != c.count) {
+    if (!c.random_start) {
+      if (o.drones > static_cast<int>(w.starts.size()))
+        throw FlagError("--drones: " + std::to_string(o.drones) + " but the world file lists only " +
+                        std::to_string(w.starts.size()) + " starts");
+      w.starts.resize(static_cast<size_t>(o.drones));
+      if (!c.ids.empty()) c.ids.resize(static_cast<size_t>(o.drones));
+    } else if (!c.ids.empty() && static_cast<int>(c.ids.size()) > o.drones) {
+      c.ids.resize(static_cast<size_t>(o.drones));
+    } else {
+      c.ids.clear();
+    }
+    c.count = o.drones;
+  }
+  if (c.random_start) {
+    std::string err = fact::sim::place_random_starts(&w, c.seed_given ? c.seed : o.seed);
+    if (!err.empty()) throw FlagError("drone placement: " + err);
+  }
+  std::string err = fact::sim::starts_error(w);
+  if (!err.empty()) throw FlagError("drone starts: " + err);
+  return w;
+}
+
+// One mt19937_64 per purpose, all derived from --seed.
+std::mt19937_64 make_rng(uint64_t seed, uint64_t purpose) {
+  std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32), static_cast<uint32_t>(purpose)};
+  return std::mt19937_64(seq);
+}
+
+std::string fmt(const char* f, double a, double b = 0, double c = 0, double d = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, f, a, b, c, d);
+  return buf;
+}
+
+// A drone as the app runs it: its simulated state, script and message counters.
+struct Drone {
+  fact::sim::SimDrone sim;
+  fact::sim::ScriptState script;
+  bool external = false;        // a setpoint arrived on LCM: the script no longer drives it
+  bool takeoff_logged = false;
+  int64_t frame_seq = 0, odom_seq = 0;
+};
+
+class Simulator {
+ public:
+  Simulator(const Options& o, fact::sim::World world, lcm::LCM* lcm, fact::app::Status* status,
+            const fact::app::Log* log)
+      : o_(o), world_(std::move(world)), lcm_(lcm), status_(status), log_(log),
+        renderer_(world_, parse_resolution(o.resolution), fact::CameraExtrinsics(), render_options(o),
+                  make_rng(o.seed, 2)()),
+        drift_rng_(make_rng(o.seed, 1)) {
+    fact::sim::parse_script(o.script, &script_);
+    std::mt19937_64 height_rng = make_rng(o.seed, 3);
+    const auto& c = world_.drone_config;
+    std::uniform_real_distribution<double> height(c.height_min, c.height_max);
+    for (const auto& s : world_.starts) {
+      Drone d;
+      d.sim = fact::sim::make_drone(s);
+      d.script.height = height(height_rng);
+      if (script_ != fact::sim::Script::none) {
+        d.sim.landed = false;
+        d.sim.have_setpoint = true;
+      }
+      drones_.push_back(d);
+    }
+  }
+
+  static fact::sim::RenderOptions render_options(const Options& o) {
+    fact::sim::RenderOptions r;
+    r.depth_noise = !o.no_depth_noise;
+    return r;
+  }
+
+  // Subscribes to every drone's setpoint channel.
+  void subscribe() {
+    for (size_t i = 0; i < drones_.size(); ++i) {
+      const std::string ch = fact::app::channel(o_.setpoint_channel, drones_[i].sim.id);
+      lcm_->subscribe(ch, &Simulator::on_setpoint_raw, this)->setQueueCapacity(1000);
+      channel_index_.push_back(ch);
+    }
+  }
+
+  void on_setpoint_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    fact::setpoint_t m;
+    if (!fact::app::decode(rbuf, channel, &m, status_, *log_)) return;
+    auto it = std::find(channel_index_.begin(), channel_index_.end(), channel);
+    if (it == channel_index_.end()) return;
+    Drone& d = drones_[static_cast<size_t>(it - channel_index_.begin())];
+    if (m.drone_id != d.sim.id) {
+      reject("wrong_drone_id", "setpoint on " + channel + " for drone_id " + std::to_string(m.drone_id) +
+                                   " (expected " + std::to_string(d.sim.id) + "), ignored");
+      return;
+    }
+    fact::sim::Setpoint sp;
+    sp.position = Eigen::Vector3d(m.position[0], m.position[1], m.position[2]);
+    sp.velocity = Eigen::Vector3d(m.velocity[0], m.velocity[1], m.velocity[2]);
+    sp.acceleration = Eigen::Vector3d(m.acceleration[0], m.acceleration[1], m.acceleration[2]);
+    sp.yaw = m.yaw;
+    sp.yaw_rate = m.yaw_rate;
+    const std::string err = fact::sim::setpoint_error(sp);
+    if (!err.empty()) {
+      reject("rejected_nan", "setpoint on " + channel + ": " + err + ", ignored");
+      return;
+    }
+    status_->count("setpoints");
+    if (!d.external) log_->event("first setpoint for drone " + std::to_string(d.sim.id) + " on " + channel);
+    d.external = true;
+    d.sim.setpoint = sp;
+    d.sim.have_setpoint = true;
+    d.sim.landed = false;
+  }
+
+  // Runs until --duration or a stop request. Returns the exit code.
+  int run() {
+    const auto wall0 = std::chrono::steady_clock::now();
+    int64_t t = 0;  // sim time since the epoch (µs)
+    const int64_t end = o_.duration > 0 ? static_cast<int64_t>(std::llround(o_.duration * 1e6)) : -1;
+    int64_t n_cam = 0, n_odom = 0, n_truth = 0;
+    double next_progress = kProgressEveryS;
+    status_->set_state("running");
+    publish_outputs(t, &n_cam, &n_odom, &n_truth);
+    while (!fact::app::stop_requested() && (end < 0 || t < end)) {
+      for (int64_t s = 0; s < kBatchUs; s += kPhysicsStepUs) {
+        step(t);
+        t += kPhysicsStepUs;
+      }
+      publish_outputs(t, &n_cam, &n_odom, &n_truth);
+      if (t * 1e-6 >= next_progress) {
+        progress(t);
+        next_progress += kProgressEveryS;
+      }
+      if (!handle_messages(wall0, t)) return 1;
+    }
+    progress(t);
+    status_->set_state("stopped");
+    status_->publish(o_.epoch_utime + t);
+    log_->event(fact::app::stop_requested() ? "stopped by signal" : "duration reached, exiting");
+    return 0;
+  }
+
+ private:
+  void reject(const std::string& counter, const std::string& line) {
+    status_->count(counter);
+    const int64_t n = status_->value(counter);
+    if (n <= 10 || n % 100 == 0) log_->event(line + " (" + counter + " " + std::to_string(n) + ")");
+  }
+
+  void step(int64_t t) {
+    const double ts = t * 1e-6;
+    for (Drone& d : drones_) {
+      if (!d.external && script_ != fact::sim::Script::none) {
+        d.sim.setpoint = fact::sim::script_setpoint(script_, &d.script, fact::sim::vio_sample(d.sim), ts, o_.spin_rate);
+        if (d.script.airborne && !d.takeoff_logged) {
+          d.takeoff_logged = true;
+          log_->event("drone " + std::to_string(d.sim.id) + fmt(" takeoff done at %.2f m after %.2f s", d.script.height, ts));
+        }
+      }
+      fact::sim::step_drone(&d.sim, world_, gains_, limits_, kPhysicsStepUs * 1e-6, &drift_rng_);
+    }
+  }
+
+  // Publishes whatever is due at sim time t: clock always, odometry, frames, truth, status.
+  void publish_outputs(int64_t t, int64_t* n_cam, int64_t* n_odom, int64_t* n_truth) {
+    const int64_t utime = o_.epoch_utime + t;
+    fact::sim_clock_t clock;
+    clock.utime = utime;
+    clock.rate = o_.rate;
+    lcm_->publish(o_.clock_channel, &clock);
+    if (due(t, o_.odometry_rate, n_odom)) publish_odometry(utime);
+    if (due(t, o_.camera_rate, n_cam)) publish_frames(utime);
+    if (due(t, o_.truth_rate, n_truth)) publish_truth(utime);
+    status_->tick(utime);
+  }
+
+  // Whether the k-th sample of a `rate` Hz stream (at round(k·1e6/rate) µs) is due at t.
+  static bool due(int64_t t, double rate, int64_t* k) {
+    const int64_t at = static_cast<int64_t>(std::llround(static_cast<double>(*k) * 1e6 / rate));
+    if (t < at) return false;
+    while (static_cast<int64_t>(std::llround(static_cast<double>(*k) * 1e6 / rate)) <= t) ++*k;
+    return true;
+  }
+
+  std::vector<fact::sim::DronePose> poses() const {
+    std::vector<fact::sim::DronePose> out;
+    for (const Drone& d : drones_) {
+      fact::sim::DronePose p;
+      p.position = d.sim.p;
+      p.yaw = d.sim.yaw;
+      p.pitch = d.sim.pitch;
+      p.roll = d.sim.roll;
+      out.push_back(p);
+    }
+    return out;
+  }
+
+  void publish_odometry(int64_t utime) {
+    for (Drone& d : drones_) {
+      const fact::sim::VioSample v = fact::sim::vio_sample(d.sim);
+      fact::odometry_t m;
+      m.utime = utime;
+      m.drone_id = d.sim.id;
+      m.seq = d.odom_seq++;
+      for (int k = 0; k < 3; ++k) {
+        m.position[k] = v.position[k];
+        m.velocity[k] = v.velocity[k];
+      }
+      m.yaw = v.yaw;
+      m.roll = v.roll;
+      m.pitch = v.pitch;
+      lcm_->publish(fact::app::channel(o_.vio_channel, d.sim.id), &m);
+      status_->count("odometry");
+    }
+  }
+
+  void publish_frames(int64_t utime) {
+    const std::vector<fact::sim::DronePose> p = poses();
+    const fact::CameraIntrinsics& k = renderer_.intrinsics();
+    for (size_t i = 0; i < drones_.size(); ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      renderer_.render(p, static_cast<int>(i), &frame_);
+      render_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      ++renders_;
+      fact::frame_t m;
+      m.utime = utime;
+      m.drone_id = drones_[i].sim.id;
+      m.seq = drones_[i].frame_seq++;
+      m.width = k.width;
+      m.height = k.height;
+      m.fx = k.fx;
+      m.fy = k.fy;
+      m.cx = k.cx;
+      m.cy = k.cy;
+      m.gray_size = static_cast<int32_t>(frame_.gray.size());
+      m.gray.assign(frame_.gray.begin(), frame_.gray.end());
+      m.depth_size = static_cast<int32_t>(frame_.depth_mm.size());
+      m.depth_mm.resize(frame_.depth_mm.size());
+      for (size_t j = 0; j < frame_.depth_mm.size(); ++j)
+        m.depth_mm[j] = static_cast<int16_t>(std::min<uint16_t>(frame_.depth_mm[j], 32767));
+      lcm_->publish(fact::app::channel(o_.frames_channel, m.drone_id), &m);
+      status_->count("frames");
+    }
+  }
+
+  void publish_truth(int64_t utime) {
+    fact::truth_t m;
+    m.utime = utime;
+    m.num_drones = static_cast<int32_t>(drones_.size());
+    for (const Drone& d : drones_) {
+      m.drone_ids.push_back(d.sim.id);
+      m.frame_yaw.push_back(d.sim.frame_yaw);
+      m.frame_origin.push_back({d.sim.origin.x(), d.sim.origin.y(), d.sim.origin.z()});
+      m.position.push_back({d.sim.p.x(), d.sim.p.y(), d.sim.p.z()});
+      m.yaw.push_back(d.sim.yaw);
+    }
+    lcm_->publish(o_.truth_channel, &m);
+    status_->count("truth");
+  }
+
+  void progress(int64_t t) {
+    const double ms = renders_ > 0 ? 1e3 * render_s_ / static_cast<double>(renders_) : 0.0;
+    log_->event(fmt("sim t = %.1f s: ", t * 1e-6) + std::to_string(status_->value("frames")) + " frames (" +
+                fmt("%.2f ms/render", ms) + "), " + std::to_string(status_->value("odometry")) + " odometry, " +
+                std::to_string(status_->value("setpoints")) + " setpoints");
+  }
+
+  // Handles pending LCM messages; with --rate > 0 also waits until the wall clock catches up
+  // with sim time t. False if LCM failed.
+  bool handle_messages(std::chrono::steady_clock::time_point wall0, int64_t t) {
+    for (;;) {
+      int wait_ms = 0;
+      if (o_.rate > 0) {
+        const auto target = wall0 + std::chrono::microseconds(static_cast<int64_t>(t / o_.rate));
+        const auto left = std::chrono::duration_cast<std::chrono::microseconds>(target - std::chrono::steady_clock::now());
+        wait_ms = static_cast<int>(std::max<int64_t>(0, (left.count() + 999) / 1000));
+      }
+      const int r = lcm_->handleTimeout(wait_ms);
+      if (r < 0) {
+        log_->event("error: LCM failed while handling messages");
+        return false;
+      }
+      if (fact::app::stop_requested()) return true;
+      if (r == 0 && wait_ms == 0) return true;  // nothing pending and no time left to wait
+      if (r == 0) continue;                     // timed out: re-check the remaining wait
+    }
+  }
+
+  const Options& o_;
+  fact::sim::World world_;
+  lcm::LCM* lcm_;
+  fact::app::Status* status_;
+  const fact::app::Log* log_;
+  fact::sim::Renderer renderer_;
+  fact::sim::RenderedFrame frame_;
+  std::mt19937_64 drift_rng_;
+  fact::sim::Script script_ = fact::sim::Script::none;
+  fact::sim::ControllerGains gains_;
+  fact::sim::DynamicsLimits limits_;
+  std::vector<Drone> drones_;
+  std::vector<std::string> channel_index_;
+  double render_s_ = 0;
+  int64_t renders_ = 0;
+};
+
+std::string world_summary(const fact::sim::World& w, const Options& o) {
+  std::string s = "world " + (o.world_file.empty() ? std::string("(built-in default)") : o.world_file) +
+                  fmt(": room %.1f x %.1f x %.1f m, ", w.room_size.x(), w.room_size.y(), w.room_size.z()) +
+                  std::to_string(w.obstacles.size()) + " obstacles, " + std::to_string(w.starts.size()) + " drones:";
+  for (const auto& d : w.starts)
+    s += " " + std::to_string(d.id) + fmt("@(%.2f, %.2f, %.2f) yaw %.2f", d.position.x(), d.position.y(), d.position.z(), d.yaw);
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"fact-sim: simulated drones in a room — rendered gray + depth frames, raw VIO, ground truth"};
+  Options o;
+  add_flags(cli, o);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e) == 0 ? 0 : 2;
+  }
+  fact::app::Log log(kApp, -1);
+  fact::sim::World world;
+  try {
+    check(o);
+    world = load_world(o);
+  } catch (const FlagError& e) {
+    log.event(std::string("error: ") + e.what());
+    return 2;
+  } catch (const fact::FormatError& e) {
+    log.event(std::string("error: bad world file: ") + e.what());
+    return 2;
+  }
+  fact::app::install_stop_handler();
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) {
+    log.event("error: cannot open LCM" + (o.lcm_url.empty() ? std::string() : " at " + o.lcm_url));
+    return 1;
+  }
+  fact::app::Status status(&lcm, o.status_channel, kApp, -1);
+  log.event("start: seed " + std::to_string(o.seed) + fmt(", rate %g, duration %g s, camera %g Hz", o.rate, o.duration, o.camera_rate) +
+            ", " + o.resolution + ", script " + o.script + ", epoch " + std::to_string(o.epoch_utime) + " us");
+  log.event(world_summary(world, o));
+  Simulator sim(o, world, &lcm, &status, &log);
+  sim.subscribe();
+  return sim.run();
+}

@@ -1,0 +1,136 @@
+// Drone dynamics (point mass with limits, tilt from the thrust direction), the simulated flight
+// controller on VIO, the VIO drift random walks, and the scripted motions.
+#include "fact/sim_dynamics.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace fact::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGravity = 9.81;
+
+double wrap_pi(double a) { return std::remainder(a, 2 * kPi); }
+
+// Rotation about z by angle a applied to a 3-vector.
+Eigen::Vector3d rot_z(double a, const Eigen::Vector3d& v) {
+  const double c = std::cos(a), s = std::sin(a);
+  return Eigen::Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
+}
+
+Eigen::Vector3d clamp_norm(const Eigen::Vector3d& v, double limit) {
+  const double n = v.norm();
+  return n > limit ? Eigen::Vector3d(v * (limit / n)) : v;
+}
+
+}  // namespace
+
+std::string setpoint_error(const Setpoint& sp) {
+  auto vec = [](const char* name, const Eigen::Vector3d& v) -> std::string {
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(v[k])) return std::string(name) + "[" + std::to_string(k) + "] = " + std::to_string(v[k]);
+    return "";
+  };
+  for (const std::string& e : {vec("position", sp.position), vec("velocity", sp.velocity),
+                               vec("acceleration", sp.acceleration)})
+    if (!e.empty()) return e;
+  if (!std::isfinite(sp.yaw)) return "yaw = " + std::to_string(sp.yaw);
+  if (!std::isfinite(sp.yaw_rate)) return "yaw_rate = " + std::to_string(sp.yaw_rate);
+  return "";
+}
+
+SimDrone make_drone(const DroneStart& start) {
+  SimDrone d;
+  d.id = start.id;
+  d.origin = start.position;
+  d.frame_yaw = start.yaw;
+  d.p = start.position;
+  d.yaw = start.yaw;
+  return d;
+}
+
+void tilt_from_acceleration(const Eigen::Vector3d& a_world, double yaw, double* roll, double* pitch) {
+  // Thrust direction in the heading frame (R_z(−yaw)·(a + g z)); the body z axis of
+  // R_y(pitch)·R_x(roll) is (cos r sin p, −sin r, cos r cos p).
+  const Eigen::Vector3d t = rot_z(-yaw, a_world + Eigen::Vector3d(0, 0, kGravity));
+  *pitch = std::atan2(t.x(), t.z());
+  *roll = std::atan2(-t.y(), std::hypot(t.x(), t.z()));
+}
+
+Eigen::Vector3d controller_acceleration(const Setpoint& sp, const VioSample& vio, const ControllerGains& g,
+                                        const DynamicsLimits& lim) {
+  const Eigen::Vector3d v_des = clamp_norm(sp.velocity + g.kp_pos * (sp.position - vio.position), lim.max_speed);
+  return clamp_norm(sp.acceleration + g.kp_vel * (v_des - vio.velocity), lim.max_accel);
+}
+
+double controller_yaw_rate(const Setpoint& sp, const VioSample& vio, const ControllerGains& g,
+                           const DynamicsLimits& lim) {
+  const double r = sp.yaw_rate + g.kp_yaw * wrap_pi(sp.yaw - vio.yaw);
+  return std::clamp(r, -lim.max_yaw_rate, lim.max_yaw_rate);
+}
+
+VioSample vio_sample(const SimDrone& d) {
+  VioSample s;
+  s.position = rot_z(-d.frame_yaw, d.p - d.origin) + d.drift_p;
+  s.velocity = rot_z(-d.frame_yaw, d.v);
+  s.yaw = d.yaw - d.frame_yaw + d.drift_yaw;
+  s.roll = d.roll;
+  s.pitch = d.pitch;
+  return s;
+}
+
+void step_drone(SimDrone* d, const World& world, const ControllerGains& g, const DynamicsLimits& lim, double dt,
+                std::mt19937_64* drift_rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double sq = std::sqrt(dt);
+  for (int k = 0; k < 3; ++k) d->drift_p[k] += world.vio.position * sq * normal(*drift_rng);
+  d->drift_yaw += world.vio.yaw * sq * normal(*drift_rng);
+  if (d->landed || !d->have_setpoint) return;
+
+  const VioSample vio = vio_sample(*d);
+  const Eigen::Vector3d a_f = controller_acceleration(d->setpoint, vio, g, lim);
+  d->a = rot_z(d->frame_yaw + d->drift_yaw, a_f);  // physical world acceleration
+  d->yaw_rate = controller_yaw_rate(d->setpoint, vio, g, lim);
+
+  d->v = clamp_norm(d->v + d->a * dt, lim.max_speed);
+  d->p += d->v * dt;
+  d->yaw += d->yaw_rate * dt;
+
+  // Floor and walls: stop at them (no bounce).
+  const Eigen::Vector3d lo = room_min(world), hi = room_max(world);
+  for (int k = 0; k < 3; ++k) {
+    if (d->p[k] < lo[k]) {
+      d->p[k] = lo[k];
+      d->v[k] = std::max(0.0, d->v[k]);
+    } else if (d->p[k] > hi[k]) {
+      d->p[k] = hi[k];
+      d->v[k] = std::min(0.0, d->v[k]);
+    }
+  }
+  tilt_from_acceleration(d->a, d->yaw, &d->roll, &d->pitch);
+}
+
+bool parse_script(const std::string& s, Script* out) {
+  if (s == "none") *out = Script::none;
+  else if (s == "hover") *out = Script::hover;
+  else if (s == "spin") *out = Script::spin;
+  else return false;
+  return true;
+}
+
+Setpoint script_setpoint(Script s, ScriptState* st, const VioSample& vio, double t, double spin_rate) {
+  Setpoint sp;
+  sp.position = Eigen::Vector3d(0, 0, st->height);
+  if (!st->airborne && std::abs(vio.position.z() - st->height) < 0.05 && vio.velocity.norm() < 0.1) {
+    st->airborne = true;
+    st->spin_start = t;
+  }
+  if (s == Script::spin && st->airborne) {
+    sp.yaw_rate = spin_rate;
+    sp.yaw = spin_rate * (t - st->spin_start);
+  }
+  return sp;
+}
+
+}  // namespace fact::sim

@@ -1,0 +1,384 @@
+// fact-sim as a real process over LCM udpm://, checked by a subscriber in this process: frames,
+// raw VIO odometry, ground truth, the simulation clock and the status heartbeat arrive with the
+// right sizes, ids and times; setpoints move a drone, bad setpoints are counted; a bad world file
+// and bad flags exit 2 naming the problem.
+//
+// udpm must never leave the machine: main() re-executes this program through
+// scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, and
+// the URLs have ttl=0. Paths come from FACT_SIM_BINARY, FACT_NETNS_RUN.
+#include "common/app.h"
+#include "fact/frame_t.hpp"
+#include "fact/odometry_t.hpp"
+#include "fact/setpoint_t.hpp"
+#include "fact/sim_clock_t.hpp"
+#include "fact/truth_t.hpp"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+constexpr int64_t kEpoch = 1700000000000000LL;
+
+bool only_loopback() {
+  std::ifstream dev("/proc/net/dev");
+  if (!dev) return false;
+  std::string line;
+  int interfaces = 0;
+  while (std::getline(dev, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(' '));
+    if (name != "lo") return false;
+    ++interfaces;
+  }
+  return interfaces == 1;
+}
+
+std::string url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
+// The listener's URL: a 4 MB receive buffer (net.core.rmem_max permitting), since frames are
+// 300 kB each and arrive in bursts at --rate 0.
+std::string listen_url(int port) { return url(port) + "&recv_buf_size=4194304"; }
+
+// fact-sim with the given flags, stderr to a file.
+class SimProcess {
+ public:
+  explicit SimProcess(const std::vector<std::string>& flags) {
+    char tmpl[] = "/tmp/fact-sim-test-XXXXXX";
+    int fd = mkstemp(tmpl);
+    err_path_ = tmpl;
+    std::vector<std::string> words = {FACT_SIM_BINARY};
+    words.insert(words.end(), flags.begin(), flags.end());
+    std::vector<char*> argv;
+    for (auto& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fd, 2);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    started_ = posix_spawn(&pid_, FACT_SIM_BINARY, &fa, nullptr, argv.data(), environ) == 0;
+    posix_spawn_file_actions_destroy(&fa);
+    close(fd);
+  }
+  ~SimProcess() {
+    if (pid_ > 0 && !reaped_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    fs::remove(err_path_);
+  }
+  bool started() const { return started_; }
+  // Exit code, or -1 after timeout_s (the process is then killed).
+  int wait(double timeout_s = 20) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < end) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        reaped_ = true;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      usleep(10000);
+    }
+    return -1;
+  }
+  bool running() {
+    int status = 0;
+    if (reaped_) return false;
+    if (waitpid(pid_, &status, WNOHANG) == pid_) {
+      reaped_ = true;
+      return false;
+    }
+    return true;
+  }
+  std::string err() const {
+    std::ifstream in(err_path_);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+ private:
+  pid_t pid_ = -1;
+  bool started_ = false, reaped_ = false;
+  std::string err_path_;
+};
+
+// Everything fact-sim publishes, collected per channel.
+class Listener {
+ public:
+  explicit Listener(const std::string& u) : lcm_(u) {
+    sub("FACT_FRAMES_.*", [this](const lcm::ReceiveBuffer* b, const std::string& ch) {
+      fact::frame_t m;
+      if (fact::app::decode_error(b->data, static_cast<int>(b->data_size), &m).empty()) frames[ch].push_back(m);
+    });
+    sub("FACT_VIO_RAW_.*", [this](const lcm::ReceiveBuffer* b, const std::string& ch) {
+      fact::odometry_t m;
+      if (fact::app::decode_error(b->data, static_cast<int>(b->data_size), &m).empty()) odometry[ch].push_back(m);
+    });
+    sub("FACT_TRUTH", [this](const lcm::ReceiveBuffer* b, const std::string&) {
+      fact::truth_t m;
+      if (fact::app::decode_error(b->data, static_cast<int>(b->data_size), &m).empty()) truth.push_back(m);
+    });
+    sub("FACT_SIM_CLOCK", [this](const lcm::ReceiveBuffer* b, const std::string&) {
+      fact::sim_clock_t m;
+      if (fact::app::decode_error(b->data, static_cast<int>(b->data_size), &m).empty()) clock.push_back(m);
+    });
+    sub("FACT_STATUS", [this](const lcm::ReceiveBuffer* b, const std::string&) {
+      fact::app_status_t m;
+      if (fact::app::decode_error(b->data, static_cast<int>(b->data_size), &m).empty()) status.push_back(m);
+    });
+  }
+  bool good() { return lcm_.good(); }
+  lcm::LCM& lcm() { return lcm_; }
+  // Handles messages until done() or timeout.
+  bool pump_until(const std::function<bool()>& done, double timeout_s = 15) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < end) {
+      if (done()) return true;
+      lcm_.handleTimeout(20);
+    }
+    return done();
+  }
+  bool stopped() const { return !status.empty() && status.back().state == "stopped"; }
+  int64_t counter(const std::string& name) const {
+    if (status.empty()) return -1;
+    const auto& s = status.back();
+    for (int i = 0; i < s.num_counters; ++i)
+      if (s.counter_names[static_cast<size_t>(i)] == name) return s.counter_values[static_cast<size_t>(i)];
+    return 0;
+  }
+
+  std::map<std::string, std::vector<fact::frame_t>> frames;
+  std::map<std::string, std::vector<fact::odometry_t>> odometry;
+  std::vector<fact::truth_t> truth;
+  std::vector<fact::sim_clock_t> clock;
+  std::vector<fact::app_status_t> status;
+
+ private:
+  using Handler = std::function<void(const lcm::ReceiveBuffer*, const std::string&)>;
+  struct Thunk {
+    Handler h;
+    void on(const lcm::ReceiveBuffer* b, const std::string& ch) { h(b, ch); }
+  };
+  void sub(const std::string& ch, Handler h) {
+    thunks_.push_back(std::make_unique<Thunk>(Thunk{std::move(h)}));
+    lcm_.subscribe(ch, &Thunk::on, thunks_.back().get())->setQueueCapacity(100000);
+  }
+  lcm::LCM lcm_;
+  std::vector<std::unique_ptr<Thunk>> thunks_;
+};
+
+class SimApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!only_loopback()) GTEST_SKIP() << "not in a private network namespace: run through scripts/netns-run.sh (ctest does)";
+  }
+};
+
+TEST_F(SimApp, TwoSimulatedSecondsOfFramesOdometryTruthAndClock) {
+  Listener l(listen_url(7801));
+  ASSERT_TRUE(l.good());
+  SimProcess sim({"--duration", "2", "--rate", "0", "--drones", "3", "--seed", "4", "--script", "hover", "--lcm-url",
+                  url(7801)});
+  ASSERT_TRUE(sim.started());
+  ASSERT_TRUE(l.pump_until([&] { return l.stopped(); })) << sim.err();
+  l.pump_until([] { return false; }, 0.3);  // stragglers
+  ASSERT_EQ(sim.wait(), 0) << sim.err();
+
+  // Clock: every 10 ms of sim time from the epoch to epoch + 2 s (201 ticks), strictly increasing.
+  EXPECT_GE(l.clock.size(), 190u);
+  ASSERT_FALSE(l.clock.empty());
+  EXPECT_EQ(l.clock.back().utime, kEpoch + 2000000);
+  for (size_t i = 1; i < l.clock.size(); ++i) ASSERT_GT(l.clock[i].utime, l.clock[i - 1].utime);
+  EXPECT_EQ(l.clock.back().rate, 0.0);
+
+  for (int id = 0; id < 3; ++id) {
+    SCOPED_TRACE("drone " + std::to_string(id));
+    // Frames at 15 Hz: t = 0, 66.7 ms, … 2 s → 31, each 424 × 240 with intrinsics.
+    const auto& fr = l.frames["FACT_FRAMES_" + std::to_string(id)];
+    EXPECT_GE(fr.size(), 28u);
+    EXPECT_LE(fr.size(), 31u);
+    for (const auto& f : fr) {
+      ASSERT_EQ(f.drone_id, id);
+      ASSERT_EQ(f.width, 424);
+      ASSERT_EQ(f.height, 240);
+      ASSERT_EQ(f.gray_size, 424 * 240);
+      ASSERT_EQ(f.depth_size, 424 * 240);
+      ASSERT_EQ(f.gray.size(), 424u * 240u);
+      ASSERT_EQ(f.depth_mm.size(), 424u * 240u);
+      ASSERT_DOUBLE_EQ(f.fx, 213.0);
+      ASSERT_GE(f.utime, kEpoch);
+      ASSERT_LE(f.utime, kEpoch + 2000000);
+      int valid = 0;
+      for (int16_t d : f.depth_mm) valid += (d > 0 && d <= 13000) ? 1 : 0;
+      ASSERT_GT(valid, 424 * 240 / 2);  // a 10 m room: most pixels have depth
+    }
+    if (fr.size() >= 2) {
+      EXPECT_EQ(fr[1].seq, fr[0].seq + 1);
+    }
+    // Odometry at 100 Hz: 201 samples; seq counts up; hover takes off (z grows, in f_i).
+    const auto& od = l.odometry["FACT_VIO_RAW_" + std::to_string(id)];
+    EXPECT_GE(od.size(), 190u);
+    ASSERT_FALSE(od.empty());
+    for (size_t i = 1; i < od.size(); ++i) ASSERT_GT(od[i].seq, od[i - 1].seq);
+    EXPECT_NEAR(od.front().position[2], 0.0, 0.01);
+    EXPECT_GT(od.back().position[2], 0.5);
+    EXPECT_EQ(od.back().drone_id, id);
+  }
+  // Truth at 10 Hz: 21 messages with all three drones; positions in the room.
+  EXPECT_GE(l.truth.size(), 19u);
+  ASSERT_FALSE(l.truth.empty());
+  const auto& t = l.truth.back();
+  ASSERT_EQ(t.num_drones, 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(t.drone_ids[static_cast<size_t>(i)], i);
+    EXPECT_LE(std::abs(t.position[static_cast<size_t>(i)][0]), 5.0);
+    EXPECT_GT(t.position[static_cast<size_t>(i)][2], 0.5);
+    EXPECT_EQ(t.frame_origin[static_cast<size_t>(i)][2], 0.0);
+  }
+  EXPECT_EQ(l.counter("frames"), 93);
+  EXPECT_EQ(l.counter("odometry"), 603);
+  EXPECT_NE(sim.err().find("takeoff done"), std::string::npos) << sim.err();
+}
+
+TEST_F(SimApp, SetpointsMoveADroneAndBadOnesAreCounted) {
+  Listener l(listen_url(7802));
+  ASSERT_TRUE(l.good());
+  SimProcess sim({"--duration", "3", "--rate", "1", "--drones", "2", "--camera-rate", "2", "--lcm-url", url(7802)});
+  ASSERT_TRUE(sim.started());
+  ASSERT_TRUE(l.pump_until([&] { return !l.clock.empty(); })) << sim.err();
+  fact::setpoint_t sp{};
+  sp.utime = l.clock.back().utime;
+  sp.drone_id = 1;
+  sp.position[2] = 1.0;
+  l.lcm().publish("FACT_SETPOINT_1", &sp);
+  fact::setpoint_t wrong = sp;
+  wrong.drone_id = 0;
+  l.lcm().publish("FACT_SETPOINT_1", &wrong);
+  fact::setpoint_t nan = sp;
+  nan.yaw = std::nan("");
+  l.lcm().publish("FACT_SETPOINT_1", &nan);
+  l.lcm().publish("FACT_SETPOINT_0", "garbage!", 8);
+  ASSERT_TRUE(l.pump_until([&] { return l.stopped(); })) << sim.err();
+  ASSERT_EQ(sim.wait(), 0) << sim.err();
+  EXPECT_EQ(l.counter("setpoints"), 1);
+  EXPECT_EQ(l.counter("wrong_drone_id"), 1);
+  EXPECT_EQ(l.counter("rejected_nan"), 1);
+  EXPECT_EQ(l.counter("undecodable"), 1);
+  const std::string err = sim.err();
+  EXPECT_NE(err.find("first setpoint for drone 1"), std::string::npos) << err;
+  EXPECT_NE(err.find("yaw = nan"), std::string::npos) << err;
+  // Drone 1 climbs towards 1 m; drone 0, without setpoints, stays on the floor.
+  const auto& o1 = l.odometry["FACT_VIO_RAW_1"];
+  const auto& o0 = l.odometry["FACT_VIO_RAW_0"];
+  ASSERT_FALSE(o1.empty());
+  ASSERT_FALSE(o0.empty());
+  EXPECT_GT(o1.back().position[2], 0.7);
+  EXPECT_LT(std::abs(o0.back().position[2]), 0.1);  // VIO drift only (σ ≈ 0.017 m after 3 s)
+  ASSERT_FALSE(l.truth.empty());
+  EXPECT_EQ(l.truth.back().position[0][2], 0.0);     // truly still on the floor
+  EXPECT_GT(l.truth.back().position[1][2], 0.7);
+}
+
+// Same seed → the same bytes: two runs publish identical frames and odometry (compared by seq,
+// in case UDP dropped one), and another seed differs.
+TEST_F(SimApp, SameSeedSameBytes) {
+  auto run = [](int port, const std::string& seed) {
+    auto l = std::make_unique<Listener>(listen_url(port));
+    SimProcess sim({"--duration", "0.5", "--rate", "0", "--drones", "2", "--script", "spin", "--seed", seed,
+                    "--lcm-url", url(port)});
+    EXPECT_TRUE(l->pump_until([&] { return l->stopped(); })) << sim.err();
+    l->pump_until([] { return false; }, 0.2);
+    EXPECT_EQ(sim.wait(), 0) << sim.err();
+    return l;
+  };
+  auto a = run(7803, "9"), b = run(7804, "9"), c = run(7805, "10");
+  int compared = 0;
+  for (const auto& fa : a->frames["FACT_FRAMES_1"])
+    for (const auto& fb : b->frames["FACT_FRAMES_1"])
+      if (fa.seq == fb.seq) {
+        EXPECT_EQ(fa.utime, fb.utime);
+        EXPECT_EQ(fa.gray, fb.gray);
+        EXPECT_EQ(fa.depth_mm, fb.depth_mm);
+        ++compared;
+      }
+  EXPECT_GE(compared, 3);
+  const auto& oa = a->odometry["FACT_VIO_RAW_0"];
+  const auto& ob = b->odometry["FACT_VIO_RAW_0"];
+  const auto& oc = c->odometry["FACT_VIO_RAW_0"];
+  ASSERT_FALSE(oa.empty());
+  ASSERT_FALSE(oc.empty());
+  for (const auto& x : oa)
+    for (const auto& y : ob)
+      if (x.seq == y.seq) {
+        ASSERT_EQ(x.utime, y.utime);
+        for (int k = 0; k < 3; ++k) ASSERT_EQ(x.position[k], y.position[k]);
+        ASSERT_EQ(x.yaw, y.yaw);
+      }
+  EXPECT_NE(oa.back().position[2], oc.back().position[2]);  // another seed: another height, drift
+}
+
+TEST(SimAppFlags, BadWorldFileAndFlagsExitTwoWithTheReason) {
+  char tmpl[] = "/tmp/fact-sim-world-XXXXXX";
+  int fd = mkstemp(tmpl);
+  const std::string text = R"({"format": "fact-world-v1", "room": {"size": [4, 4, -3]}})";
+  ASSERT_EQ(write(fd, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  close(fd);
+  {
+    SimProcess sim({"--world", tmpl, "--lcm-url", "memq://"});
+    ASSERT_TRUE(sim.started());
+    EXPECT_EQ(sim.wait(), 2);
+    EXPECT_NE(sim.err().find("room.size[2]: expected a number > 0, got -3"), std::string::npos) << sim.err();
+  }
+  fs::remove(tmpl);
+  {
+    SimProcess sim({"--resolution", "320x200", "--lcm-url", "memq://"});
+    EXPECT_EQ(sim.wait(), 2);
+    EXPECT_NE(sim.err().find("--resolution"), std::string::npos) << sim.err();
+  }
+  {
+    SimProcess sim({"--help"});
+    EXPECT_EQ(sim.wait(), 0);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool listing = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
+  if (!listing && !only_loopback()) {
+    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
+    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+    std::vector<char*> argv2;
+    for (std::string& w : words) argv2.push_back(w.data());
+    argv2.push_back(nullptr);
+    execv(FACT_NETNS_RUN, argv2.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
+    return 125;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
