@@ -2,6 +2,8 @@
 // the value they read, so every error names the path and the value (as lib/io/json_io.cpp does).
 #include "fact/world_io.h"
 
+#include "io/json_read.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -16,112 +18,8 @@
 namespace fact {
 namespace {
 
-using Json = nlohmann::ordered_json;
+using namespace json_read;
 constexpr const char* kWorldFormat = "fact-world-v1";
-
-std::string member(const std::string& path, const std::string& key) {
-  bool ident = !key.empty() && !std::isdigit(static_cast<unsigned char>(key[0])) &&
-               std::all_of(key.begin(), key.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
-  if (!ident) return path + "[" + Json(key).dump() + "]";
-  return path.empty() ? key : path + "." + key;
-}
-
-std::string element(const std::string& path, std::size_t i) { return path + "[" + std::to_string(i) + "]"; }
-
-std::string describe(const Json& value) {
-  std::string text = value.dump();
-  if (text.size() <= 60) return text;
-  std::size_t cut = 60;
-  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
-  return text.substr(0, cut) + "...";
-}
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw FormatError((path.empty() ? std::string("top level") : path) + ": " + what);
-}
-
-// Tracks the path during parsing so a repeated key is an error naming it, and a syntax error is
-// reported near where it happened.
-class PathTracker {
- public:
-  bool on_event(Json::parse_event_t event, const Json& parsed) {
-    using Event = Json::parse_event_t;
-    switch (event) {
-      case Event::object_start: levels_.push_back({false, 0, "", {}}); break;
-      case Event::array_start: levels_.push_back({true, 0, "", {}}); break;
-      case Event::key: {
-        Level& l = levels_.back();
-        l.key = parsed.get<std::string>();
-        if (!l.keys.insert(l.key).second) fail(path(), "duplicate key " + Json(l.key).dump());
-        break;
-      }
-      case Event::value: next(); break;
-      case Event::object_end:
-      case Event::array_end:
-        levels_.pop_back();
-        next();
-        break;
-    }
-    return true;
-  }
-  std::string path() const {
-    std::string p;
-    for (const Level& l : levels_) p = l.array ? element(p, l.index) : member(p, l.key);
-    return p;
-  }
-
- private:
-  struct Level {
-    bool array;
-    std::size_t index;
-    std::string key;
-    std::set<std::string> keys;
-  };
-  void next() {
-    if (!levels_.empty() && levels_.back().array) ++levels_.back().index;
-  }
-  std::vector<Level> levels_;
-};
-
-Json parse_text(const std::string& text) {
-  PathTracker tracker;
-  Json::parser_callback_t cb = [&tracker](int, Json::parse_event_t e, Json& parsed) { return tracker.on_event(e, parsed); };
-  try {
-    return Json::parse(text, cb);
-  } catch (const Json::exception& e) {
-    std::string message = e.what();
-    const std::size_t tag_end = message.find("] ");
-    if (tag_end != std::string::npos) message = message.substr(tag_end + 2);
-    const std::string near = tracker.path();
-    throw FormatError("invalid JSON" + (near.empty() ? "" : " near " + near) + ": " + message);
-  }
-}
-
-void expect_object(const Json& v, const std::string& path) {
-  if (!v.is_object()) fail(path, "expected an object, got " + describe(v));
-}
-
-void allow_only(const Json& object, const std::string& path, std::initializer_list<const char*> keys) {
-  for (const auto& item : object.items()) {
-    if (std::any_of(keys.begin(), keys.end(), [&](const char* k) { return item.key() == k; })) continue;
-    std::string list;
-    for (const char* k : keys) list += (list.empty() ? "" : ", ") + Json(k).dump();
-    fail(member(path, item.key()), "unknown key (allowed: " + list + ")");
-  }
-}
-
-const Json& need(const Json& object, const std::string& path, const char* key) {
-  const auto it = object.find(key);
-  if (it == object.end()) fail(member(path, key), "required key is missing");
-  return *it;
-}
-
-double number(const Json& v, const std::string& path) {
-  if (!v.is_number()) fail(path, "expected a number, got " + describe(v));
-  const double x = v.get<double>();
-  if (!std::isfinite(x)) fail(path, "expected a finite number, got " + describe(v));
-  return x;
-}
 
 double positive(const Json& v, const std::string& path) {
   const double x = number(v, path);
@@ -133,19 +31,6 @@ double non_negative(const Json& v, const std::string& path) {
   const double x = number(v, path);
   if (x < 0) fail(path, "expected a number >= 0, got " + describe(v));
   return x;
-}
-
-int integer(const Json& v, const std::string& path) {
-  if (!v.is_number_integer()) fail(path, "expected an integer, got " + describe(v));
-  const bool fits = v.is_number_unsigned() ? v.get<std::uint64_t>() <= static_cast<std::uint64_t>(INT_MAX)
-                                           : v.get<std::int64_t>() >= INT_MIN && v.get<std::int64_t>() <= INT_MAX;
-  if (!fits) fail(path, "integer out of range, got " + describe(v));
-  return v.get<int>();
-}
-
-Eigen::Vector3d vec3(const Json& v, const std::string& path) {
-  if (!v.is_array() || v.size() != 3) fail(path, "expected 3 numbers, got " + describe(v));
-  return {number(v[0], element(path, 0)), number(v[1], element(path, 1)), number(v[2], element(path, 2))};
 }
 
 Eigen::Vector3d positive3(const Json& v, const std::string& path) {
