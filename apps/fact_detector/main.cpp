@@ -1,0 +1,579 @@
+// fact-detector: gray + depth frames in (fact::frame_t on FACT_FRAMES_<id>, or a directory of PNG
+// pairs), tracked detections out (fact::detections_t on FACT_DETECTIONS_<id>), one message per
+// processed frame (also when empty), holding the confirmed tracks matched in that frame.
+//
+// Per frame: checks (sizes, intrinsics, depth) → backend (depth segmentation, or YOLO through
+// OpenCV dnn) → tracker (ByteTrack style, own rotation compensated by H = K·R·K⁻¹ from the
+// odometry attitude at the frame time) → per confirmed track: range (mean of the smallest X % of
+// the box's depths + target radius) and the vector in the gravity-aligned body frame.
+// The work is lib/'s (fact/detector.h, fact/tracker.h, fact/yolo.h); this file is plumbing.
+//
+// Exit codes: 0 end of --png-dir, or SIGINT/SIGTERM; 1 LCM failed; 2 bad flags, an unreadable
+// --png-dir, or a --model that does not load.
+#include "common/app.h"
+#include "common/flags.h"
+#include "fact/detector.h"
+#include "fact/odometry_filter.h"
+#include "fact/odometry_t.hpp"
+#include "fact/tracker.h"
+#include "fact/yolo.h"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+constexpr const char* kApp = "fact-detector";
+
+struct Options {
+  fact::app::CommonFlags common;
+  std::string frames_channel;     // "" = FACT_FRAMES_<id>
+  std::string odometry_channel;   // "" = FACT_ODOMETRY_<id>
+  std::string output_channel;     // "" = FACT_DETECTIONS_<id>
+  std::string png_dir;            // read frames from here instead of LCM
+  std::string backend = "depth";  // depth | yolo
+  std::string model;              // yolo: the ONNX file
+  int yolo_size = 640;            // yolo: model input side (px)
+  double odometry_wait_ms = 50;   // how long a frame waits for odometry newer than it (ms, wall clock)
+  std::vector<double> camera_offset = {0.10, 0.0, 0.0};  // optical centre in the body frame (m)
+  double camera_pitch = 0.0;      // rad, camera tilted down by this about the body y axis
+  fact::RangeOptions range;
+  fact::SegmentationOptions segmentation;
+  fact::TrackerOptions tracker;
+};
+
+void add_flags(CLI::App& app, Options& o) {
+  fact::app::add_common_flags(app, &o.common, fact::app::DroneIdFlag::optional);
+  app.add_option("--frames-channel", o.frames_channel, "Input frames (default FACT_FRAMES_<id>)")->type_name("CHANNEL");
+  app.add_option("--odometry-channel", o.odometry_channel, "Odometry for the attitude (default FACT_ODOMETRY_<id>)")
+      ->type_name("CHANNEL");
+  app.add_option("--output-channel", o.output_channel, "Detections out (default FACT_DETECTIONS_<id>)")
+      ->type_name("CHANNEL");
+  app.add_option("--png-dir", o.png_dir,
+                 "Read <utime>_gray.png + <utime>_depth.png pairs, intrinsics.json and optional odometry.tum "
+                 "from this directory instead of LCM; exit 0 at the end")
+      ->type_name("DIR");
+  app.add_option("--backend", o.backend, "Detector backend: depth (segmentation) or yolo (ONNX model)")
+      ->type_name("NAME")
+      ->capture_default_str();
+  app.add_option("--model", o.model, "yolo: ONNX YOLOv8 model file")->type_name("FILE");
+  app.add_option("--yolo-size", o.yolo_size, "yolo: the model's square input size (px)")->capture_default_str();
+  app.add_option("--odometry-wait-ms", o.odometry_wait_ms,
+                 "How long a frame waits for odometry newer than it before it is processed with the newest (ms)")
+      ->capture_default_str();
+  app.add_option("--smallest-percent", o.range.smallest_percent,
+                 "Range: mean of the smallest X % of the valid depths in the box (0 < X <= 100)")
+      ->capture_default_str();
+  app.add_option("--target-radius", o.range.target_radius,
+                 "Range: added to the near-surface distance to reach the target's centre (m)")
+      ->capture_default_str();
+  app.add_option("--camera-offset", o.camera_offset, "Camera optical centre in the body frame x,y,z (m, FLU)")
+      ->delimiter(',')
+      ->expected(3)
+      ->type_name("X,Y,Z");
+  app.add_option("--camera-pitch", o.camera_pitch, "Camera tilted down by this angle about the body y axis (rad)")
+      ->capture_default_str();
+  app.add_option("--min-depth", o.segmentation.min_depth, "Segmentation: ignore nearer depths (m)")
+      ->capture_default_str();
+  app.add_option("--max-depth", o.segmentation.max_depth, "Segmentation: no blob farther than this (m)")
+      ->capture_default_str();
+  app.add_option("--min-size", o.segmentation.min_size, "Segmentation: a drone blob's larger side at least (m)")
+      ->capture_default_str();
+  app.add_option("--max-size", o.segmentation.max_size, "Segmentation: a drone blob's sides at most (m)")
+      ->capture_default_str();
+  app.add_option("--background-gap", o.segmentation.background_gap,
+                 "Segmentation: a drone is nearer than its surroundings by at least this (m)")
+      ->capture_default_str();
+  app.add_option("--confirm-hits", o.tracker.confirm_hits, "Tracker: matched frames to confirm a track")
+      ->capture_default_str();
+  app.add_option("--max-lost", o.tracker.max_lost, "Tracker: frames a lost track is kept")->capture_default_str();
+  app.footer(
+      "Publishes fact::detections_t per processed frame: the confirmed tracks matched in it, each with\n"
+      "track_id, box (u, v, w, h px; edges enclose the pixels), confidence, range (m, centre to centre)\n"
+      "and vector (m, observer centre -> target centre, gravity-aligned body frame: x heading, z up).\n"
+      "Attitude (roll, pitch for the vector; yaw, pitch, roll for the rotation compensation) comes from\n"
+      "odometry interpolated at the frame time; a frame waits up to --odometry-wait-ms for odometry\n"
+      "newer than it, then uses the newest (counted: stale_odometry; none at all: no_odometry, level).\n"
+      "--png-dir DIR: DIR/intrinsics.json {\"width\",\"height\",\"fx\",\"fy\",\"cx\",\"cy\"}, pairs\n"
+      "<utime>_gray.png (8-bit) + <utime>_depth.png (16-bit mm, 0 = invalid), optional DIR/odometry.tum\n"
+      "(t tx ty tz qx qy qz qw, t in s, Hamilton world-from-body quaternion).\n"
+      "Rejected, counted and logged, the app keeps running: wrong sizes (bad_frame), bad intrinsics\n"
+      "(bad_intrinsics), all-invalid depth (no_depth), depth and gray of different sizes (size_mismatch),\n"
+      "another drone's frame (wrong_drone_id), undecodable messages (undecodable).\n"
+      "Exit codes: 0 end of --png-dir or SIGINT/SIGTERM; 1 LCM failure; 2 bad flags, unreadable --png-dir,\n"
+      "or a --model that fails to load.");
+}
+
+void check(Options& o) {
+  fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::optional);
+  const int id = o.common.drone_id;
+  if (o.frames_channel.empty()) o.frames_channel = fact::app::channel("FACT_FRAMES", id);
+  if (o.odometry_channel.empty()) o.odometry_channel = fact::app::channel("FACT_ODOMETRY", id);
+  if (o.output_channel.empty()) o.output_channel = fact::app::channel("FACT_DETECTIONS", id);
+  if (o.backend != "depth" && o.backend != "yolo")
+    throw fact::app::FlagError("--backend: expected depth or yolo, got \"" + o.backend + "\"");
+  if (o.backend == "yolo" && o.model.empty()) throw fact::app::FlagError("--backend yolo needs --model FILE");
+  if (o.backend != "yolo" && !o.model.empty()) throw fact::app::FlagError("--model is only for --backend yolo");
+  if (!(o.range.smallest_percent > 0 && o.range.smallest_percent <= 100))
+    throw fact::app::FlagError("--smallest-percent: expected a number in (0, 100], got " +
+                               std::to_string(o.range.smallest_percent));
+  if (!std::isfinite(o.range.target_radius) || o.range.target_radius < 0)
+    throw fact::app::FlagError("--target-radius: expected a finite number >= 0, got " +
+                               std::to_string(o.range.target_radius));
+  for (double c : o.camera_offset)
+    if (!std::isfinite(c)) throw fact::app::FlagError("--camera-offset: expected finite numbers");
+  if (!std::isfinite(o.camera_pitch)) throw fact::app::FlagError("--camera-pitch: expected a finite number");
+  if (!(o.odometry_wait_ms >= 0 && o.odometry_wait_ms < 1e6))
+    throw fact::app::FlagError("--odometry-wait-ms: expected a number in [0, 1e6), got " +
+                               std::to_string(o.odometry_wait_ms));
+  fact::app::check_positive("--min-depth", o.segmentation.min_depth);
+  fact::app::check_positive("--max-depth", o.segmentation.max_depth);
+  fact::app::check_positive("--min-size", o.segmentation.min_size);
+  fact::app::check_positive("--max-size", o.segmentation.max_size);
+  if (!(o.segmentation.background_gap >= 0))
+    throw fact::app::FlagError("--background-gap: expected a number >= 0, got " +
+                               std::to_string(o.segmentation.background_gap));
+  if (o.tracker.confirm_hits < 1) throw fact::app::FlagError("--confirm-hits: expected >= 1");
+  if (o.tracker.max_lost < 0) throw fact::app::FlagError("--max-lost: expected >= 0");
+}
+
+fact::CameraExtrinsics extrinsics_of(const Options& o) {
+  fact::CameraExtrinsics e;  // default: looking ahead; pitched down by camera_pitch about body y
+  e.R_body_cam = Eigen::AngleAxisd(o.camera_pitch, Eigen::Vector3d::UnitY()).toRotationMatrix() * e.R_body_cam;
+  e.t_body_cam = Eigen::Vector3d(o.camera_offset[0], o.camera_offset[1], o.camera_offset[2]);
+  return e;
+}
+
+// Attitude samples by time; linear interpolation (yaw is unwrapped upstream).
+struct Attitude {
+  int64_t utime = 0;
+  double yaw = 0, pitch = 0, roll = 0;
+};
+class AttitudeBuffer {
+ public:
+  void push(const Attitude& a) {
+    if (!samples_.empty() && a.utime <= samples_.back().utime) return;
+    samples_.push_back(a);
+    while (samples_.size() > 2000) samples_.pop_front();
+  }
+  bool empty() const { return samples_.empty(); }
+  int64_t newest() const { return samples_.empty() ? INT64_MIN : samples_.back().utime; }
+  // Interpolated at t, clamped to the oldest / newest sample.
+  Attitude at(int64_t t) const {
+    if (t <= samples_.front().utime) return samples_.front();
+    if (t >= samples_.back().utime) return samples_.back();
+    auto it = std::lower_bound(samples_.begin(), samples_.end(), t,
+                               [](const Attitude& a, int64_t x) { return a.utime < x; });
+    const Attitude& b = *it;
+    const Attitude& a = *(it - 1);
+    const double s = double(t - a.utime) / double(b.utime - a.utime);
+    return Attitude{t, a.yaw + s * (b.yaw - a.yaw), a.pitch + s * (b.pitch - a.pitch), a.roll + s * (b.roll - a.roll)};
+  }
+
+ private:
+  std::deque<Attitude> samples_;
+};
+
+// Backend + tracker + range: a frame with its attitude → detections_t.
+class Pipeline {
+ public:
+  Pipeline(const Options& o, std::unique_ptr<fact::YoloDetector> yolo)
+      : o_(o), extrinsics_(extrinsics_of(o)), tracker_(o.tracker), yolo_(std::move(yolo)) {}
+
+  // "" and *out filled, or what went wrong with the backend.
+  std::string process(const fact::FrameView& frame, int64_t seq, const std::optional<Attitude>& att,
+                      fact::detections_t* out) {
+    std::vector<fact::BoxDetection> boxes;
+    if (yolo_) {
+      std::string error;
+      boxes = yolo_->detect(frame, &error);
+      if (!error.empty()) return "yolo: " + error;
+    } else {
+      boxes = fact::detect_depth(frame, o_.segmentation);
+    }
+    Eigen::Matrix3d H = Eigen::Matrix3d::Identity();  // previous frame's pixels → this frame's
+    if (att && previous_) {
+      const Eigen::Matrix3d R = fact::camera_rotation(previous_->yaw, previous_->pitch, previous_->roll, att->yaw,
+                                                      att->pitch, att->roll, extrinsics_);
+      H = fact::rotation_homography(frame.intrinsics, R);
+    }
+    previous_ = att;
+    tracker_.update(boxes, H);
+    out->utime = frame.utime;
+    out->drone_id = o_.common.drone_id;
+    out->frame_seq = seq;
+    out->detections.clear();
+    const double roll = att ? att->roll : 0.0, pitch = att ? att->pitch : 0.0;
+    for (const fact::Track* t : tracker_.confirmed_matched()) {
+      const fact::TargetVector v = fact::target_vector(frame, t->box, extrinsics_, roll, pitch, o_.range);
+      if (!v.valid) continue;
+      fact::detection_t d;
+      d.track_id = t->id;
+      for (int i = 0; i < 3; ++i) d.vector[i] = v.vector_g[i];
+      d.box[0] = t->box.u;
+      d.box[1] = t->box.v;
+      d.box[2] = t->box.w;
+      d.box[3] = t->box.h;
+      d.confidence = t->box.score;
+      d.range = v.range;
+      out->detections.push_back(d);
+    }
+    out->count = static_cast<int32_t>(out->detections.size());
+    return "";
+  }
+
+ private:
+  const Options& o_;
+  fact::CameraExtrinsics extrinsics_;
+  fact::Tracker tracker_;
+  std::unique_ptr<fact::YoloDetector> yolo_;
+  std::optional<Attitude> previous_;
+};
+
+// A frame_t checked and converted: "" or the reason (and the counter name in *counter).
+std::string check_frame(const fact::frame_t& m, int drone_id, std::string* counter) {
+  auto fail = [&](const char* c, const std::string& why) {
+    *counter = c;
+    return "frame seq " + std::to_string(m.seq) + ": " + why;
+  };
+  if (m.drone_id != drone_id)
+    return fail("wrong_drone_id", "drone_id = " + std::to_string(m.drone_id) + ", expected " + std::to_string(drone_id));
+  if (m.width <= 0 || m.width > 8192 || m.height <= 0 || m.height > 8192)
+    return fail("bad_frame", "width × height = " + std::to_string(m.width) + " × " + std::to_string(m.height) +
+                                 " (each must be 1 … 8192)");
+  if (m.gray_size != m.depth_size)
+    return fail("size_mismatch", "gray_size = " + std::to_string(m.gray_size) + " but depth_size = " +
+                                     std::to_string(m.depth_size) + " (depth and gray of different sizes)");
+  const int64_t n = int64_t(m.width) * m.height;
+  if (m.gray_size != n)
+    return fail("bad_frame", "gray_size = " + std::to_string(m.gray_size) + ", expected width × height = " +
+                                 std::to_string(n));
+  fact::CameraIntrinsics k{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
+  if (std::string e = fact::intrinsics_error(k); !e.empty()) return fail("bad_intrinsics", "intrinsics: " + e);
+  return "";
+}
+
+class App {
+ public:
+  App(lcm::LCM* lcm, const Options& o, std::unique_ptr<fact::YoloDetector> yolo)
+      : lcm_(lcm), o_(o), log_(kApp, o.common.drone_id), status_(lcm, o.common.status_channel, kApp, o.common.drone_id),
+        pipeline_(o, std::move(yolo)) {
+    status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
+    for (const char* c : {"frames", "published", "detections", "bad_frame", "size_mismatch", "bad_intrinsics",
+                          "no_depth", "wrong_drone_id", "undecodable", "stale_odometry", "no_odometry",
+                          "backend_failed", "publish_failed"})
+      status_.count(c, 0);
+  }
+  const fact::app::Log& log() const { return log_; }
+  fact::app::Status& status() { return status_; }
+  AttitudeBuffer& attitudes() { return attitudes_; }
+
+  void on_frame(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    auto m = std::make_shared<fact::frame_t>();
+    if (!fact::app::decode(rbuf, channel, m.get(), &status_, log_)) return;
+    std::string counter;
+    if (std::string e = check_frame(*m, o_.common.drone_id, &counter); !e.empty()) {
+      reject(counter, e);
+      return;
+    }
+    pending_.push_back(Pending{m, fact::app::now_us()});
+    while (pending_.size() > 4) {  // never fall behind: the oldest goes with what we have
+      run(pending_.front());
+      pending_.pop_front();
+    }
+    flush(false);
+  }
+
+  void on_odometry(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    fact::odometry_t m;
+    if (!fact::app::decode(rbuf, channel, &m, &status_, log_)) return;
+    if (m.drone_id != o_.common.drone_id) {
+      reject("wrong_drone_id", "odometry from drone " + std::to_string(m.drone_id) + " on " + channel);
+      return;
+    }
+    if (!std::isfinite(m.yaw) || !std::isfinite(m.pitch) || !std::isfinite(m.roll)) {
+      reject("bad_odometry", "odometry seq " + std::to_string(m.seq) + ": non-finite attitude");
+      return;
+    }
+    attitudes_.push(Attitude{m.utime, m.yaw, m.pitch, m.roll});
+    flush(false);
+  }
+
+  // Runs the pending frames whose odometry is there, or whose wait is over (all with force).
+  void flush(bool force) {
+    const int64_t now = fact::app::now_us();
+    while (!pending_.empty()) {
+      const Pending& p = pending_.front();
+      const bool ready = attitudes_.newest() >= p.frame->utime;
+      const bool waited = now - p.arrival >= static_cast<int64_t>(o_.odometry_wait_ms * 1000);
+      if (!ready && !waited && !force) break;
+      run(p);
+      pending_.pop_front();
+    }
+    status_.tick(now);
+  }
+
+  // One frame from any source, with its attitude (or none).
+  void process(const fact::FrameView& view, int64_t seq, const std::optional<Attitude>& att) {
+    status_.count("frames");
+    if (std::string e = fact::frame_error(view); !e.empty()) {
+      reject(e.find("depth_mm: all") != std::string::npos ? "no_depth" : "bad_frame",
+             "frame seq " + std::to_string(seq) + ": " + e);
+      return;
+    }
+    fact::detections_t out;
+    if (std::string e = pipeline_.process(view, seq, att, &out); !e.empty()) {
+      reject("backend_failed", "frame seq " + std::to_string(seq) + ": " + e);
+      return;
+    }
+    if (lcm_->publish(o_.output_channel, &out) != 0) {
+      reject("publish_failed", "publish on " + o_.output_channel + " failed");
+      return;
+    }
+    status_.count("published");
+    status_.count("detections", out.count);
+    if (status_.value("published") == 1) {
+      log_.event("first detections published on " + o_.output_channel + " (" + std::to_string(out.count) +
+                 " confirmed tracks)");
+      status_.set_state("detecting");
+    }
+    for (const fact::detection_t& d : out.detections)
+      if (logged_tracks_.insert(d.track_id).second) {
+        std::ostringstream s;
+        s << "track " << d.track_id << " confirmed at frame seq " << seq << ": range " << d.range << " m, vector ("
+          << d.vector[0] << ", " << d.vector[1] << ", " << d.vector[2] << ")";
+        log_.event(s.str());
+      }
+  }
+
+  void reject(const std::string& counter, const std::string& line) {
+    status_.count(counter);
+    status_.note(line);
+    const int64_t n = status_.value(counter);
+    if (n <= 10 || n % 100 == 0) log_.event(line + " [" + counter + " " + std::to_string(n) + "]");
+  }
+
+  std::string summary() const {
+    std::ostringstream s;
+    s << "frames " << status_.value("frames") << ", published " << status_.value("published") << ", detections "
+      << status_.value("detections");
+    for (const char* c : {"bad_frame", "size_mismatch", "bad_intrinsics", "no_depth", "wrong_drone_id", "undecodable",
+                          "stale_odometry", "no_odometry", "bad_odometry", "backend_failed", "publish_failed"})
+      if (status_.value(c) > 0) s << ", " << c << " " << status_.value(c);
+    return s.str();
+  }
+
+ private:
+  struct Pending {
+    std::shared_ptr<fact::frame_t> frame;
+    int64_t arrival;  // µs (app clock)
+  };
+
+  void run(const Pending& p) {
+    const fact::frame_t& m = *p.frame;
+    depth_.resize(m.depth_mm.size());
+    for (size_t i = 0; i < depth_.size(); ++i)  // int16 on the wire; negative is not a depth
+      depth_[i] = m.depth_mm[i] > 0 ? static_cast<uint16_t>(m.depth_mm[i]) : 0;
+    fact::FrameView view;
+    view.utime = m.utime;
+    view.intrinsics = fact::CameraIntrinsics{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
+    view.gray = m.gray.data();
+    view.depth_mm = depth_.data();
+    std::optional<Attitude> att;
+    if (attitudes_.empty()) {
+      status_.count("no_odometry");
+    } else {
+      if (attitudes_.newest() < m.utime) status_.count("stale_odometry");
+      att = attitudes_.at(m.utime);
+    }
+    process(view, m.seq, att);
+  }
+
+  lcm::LCM* lcm_;
+  const Options& o_;
+  fact::app::Log log_;
+  fact::app::Status status_;
+  Pipeline pipeline_;
+  AttitudeBuffer attitudes_;
+  std::deque<Pending> pending_;
+  std::vector<uint16_t> depth_;
+  std::set<int> logged_tracks_;
+};
+
+// --png-dir: "" or why the directory cannot be used.
+struct PngPair {
+  int64_t utime;
+  fs::path gray, depth;
+};
+std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std::vector<PngPair>* pairs,
+                         AttitudeBuffer* attitudes, int* odometry_lines) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return "--png-dir " + dir + ": not a directory";
+  const fs::path ipath = fs::path(dir) / "intrinsics.json";
+  std::ifstream in(ipath);
+  if (!in) return ipath.string() + ": cannot open";
+  try {
+    nlohmann::json j = nlohmann::json::parse(in);
+    for (const char* key : {"width", "height", "fx", "fy", "cx", "cy"})
+      if (!j.contains(key) || !j[key].is_number()) return ipath.string() + ": \"" + key + "\" missing or not a number";
+    *k = fact::CameraIntrinsics{j["width"].get<int>(), j["height"].get<int>(), j["fx"].get<double>(),
+                                j["fy"].get<double>(), j["cx"].get<double>(), j["cy"].get<double>()};
+  } catch (const std::exception& e) {
+    return ipath.string() + ": " + e.what();
+  }
+  if (std::string e = fact::intrinsics_error(*k); !e.empty()) return ipath.string() + ": " + e;
+  std::map<int64_t, PngPair> found;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string suffix = "_gray.png";
+    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+    const std::string stem = name.substr(0, name.size() - suffix.size());
+    if (stem.empty() || stem.find_first_not_of("0123456789") != std::string::npos) continue;
+    const int64_t t = std::stoll(stem);
+    found[t] = PngPair{t, entry.path(), fs::path(dir) / (stem + "_depth.png")};
+  }
+  for (auto& [t, p] : found) pairs->push_back(p);
+  const fs::path tum = fs::path(dir) / "odometry.tum";
+  std::ifstream odo(tum);
+  std::string line;
+  *odometry_lines = 0;
+  while (odo && std::getline(odo, line)) {
+    fact::PoseLine pl;
+    std::string error;
+    if (fact::parse_pose_line(line, &pl, &error) != fact::PoseLineKind::sample) continue;
+    fact::Attitude a;
+    if (!fact::attitude_from_quaternion(pl.qx, pl.qy, pl.qz, pl.qw, &a).empty()) continue;
+    attitudes->push(Attitude{static_cast<int64_t>(std::llround(pl.time * 1e6)), a.yaw, a.pitch, a.roll});
+    ++*odometry_lines;
+  }
+  return "";
+}
+
+int run_png_dir(App& app, const Options& o) {
+  fact::CameraIntrinsics k;
+  std::vector<PngPair> pairs;
+  int odometry_lines = 0;
+  if (std::string e = read_png_dir(o.png_dir, &k, &pairs, &app.attitudes(), &odometry_lines); !e.empty()) {
+    std::cerr << kApp << ": error: " << e << "\n";
+    return 2;
+  }
+  app.log().event("png dir " + o.png_dir + ": " + std::to_string(pairs.size()) + " gray frames, " +
+                  std::to_string(odometry_lines) + " odometry samples, " + std::to_string(k.width) + " x " +
+                  std::to_string(k.height) + ", publishing on " + o.output_channel);
+  app.status().set_state("reading " + o.png_dir);
+  int64_t seq = 0;
+  for (const PngPair& p : pairs) {
+    if (fact::app::stop_requested()) break;
+    const std::string where = "frame " + std::to_string(p.utime);
+    cv::Mat gray = cv::imread(p.gray.string(), cv::IMREAD_UNCHANGED);
+    cv::Mat depth = cv::imread(p.depth.string(), cv::IMREAD_UNCHANGED);
+    app.status().count("frames", 0);
+    if (gray.empty() || depth.empty()) {
+      app.reject("bad_frame", where + ": cannot read " + (gray.empty() ? p.gray : p.depth).string());
+    } else if (gray.type() != CV_8UC1 || depth.type() != CV_16UC1) {
+      app.reject("bad_frame", where + ": expected 8-bit gray and 16-bit depth, got types " +
+                                  std::to_string(gray.type()) + " and " + std::to_string(depth.type()));
+    } else if (gray.size() != depth.size()) {
+      app.reject("size_mismatch", where + ": gray " + std::to_string(gray.cols) + " x " + std::to_string(gray.rows) +
+                                      ", depth " + std::to_string(depth.cols) + " x " + std::to_string(depth.rows));
+    } else if (gray.cols != k.width || gray.rows != k.height) {
+      app.reject("bad_frame", where + ": " + std::to_string(gray.cols) + " x " + std::to_string(gray.rows) +
+                                  ", intrinsics.json says " + std::to_string(k.width) + " x " + std::to_string(k.height));
+    } else {
+      fact::FrameView view;
+      view.utime = p.utime;
+      view.intrinsics = k;
+      view.gray = gray.ptr<uint8_t>();
+      view.depth_mm = depth.ptr<uint16_t>();
+      std::optional<Attitude> att;
+      if (!app.attitudes().empty()) att = app.attitudes().at(p.utime);
+      app.process(view, seq, att);
+    }
+    ++seq;
+    app.status().tick(fact::app::now_us());
+  }
+  app.log().event("end of " + o.png_dir + ": " + app.summary());
+  app.status().set_state("finished");
+  app.status().publish(fact::app::now_us());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  options.common.drone_id = 0;
+  CLI::App cli{"Detects and tracks other drones in gray + depth frames (LCM fact::frame_t, or a directory of\n"
+               "PNG pairs) and publishes fact::detections_t with body-frame vectors.",
+               kApp};
+  add_flags(cli, options);
+  cli.get_formatter()->column_width(34);
+  try {
+    cli.parse(argc, argv);
+    check(options);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return cli.exit(e);
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  } catch (const fact::app::FlagError& e) {
+    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+  const fact::app::Log log(kApp, options.common.drone_id);
+  cv::setNumThreads(1);  // one core per detector: N drones' detectors share a machine in simulation
+  std::unique_ptr<fact::YoloDetector> yolo;
+  if (options.backend == "yolo") {
+    fact::YoloOptions yo;
+    yo.input_size = options.yolo_size;
+    if (std::string e = fact::yolo_options_error(yo); !e.empty()) {
+      std::cerr << kApp << ": error: --yolo-size: " << e << "\n";
+      return 2;
+    }
+    std::string error;
+    yolo = fact::YoloDetector::load(options.model, yo, &error);
+    if (!yolo) {
+      std::cerr << kApp << ": error: --model " << options.model << ": " << error << "\n";
+      return 2;
+    }
+    log.event("yolo model " + options.model + " loaded (" + std::to_string(yolo->num_classes()) + " classes)");
+  }
+  lcm::LCM lcm(options.common.lcm_url);
+  if (!lcm.good()) {
+    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
+    return 1;
+  }
+  fact::app::install_stop_handler();
+  App app(&lcm, options, std::move(yolo));
+  if (!options.png_dir.empty()) return run_png_dir(app, options);
+  if (!fact::app::start_clock(lcm, options.common, log)) return 1;
+  lcm.subscribe(options.frames_channel, &App::on_frame, &app)->setQueueCapacity(8);
+  lcm.subscribe(options.odometry_channel, &App::on_odometry, &app)->setQueueCapacity(1000);
+  log.event("backend " + options.backend + ", frames on " + options.frames_channel + ", odometry on " +
+            options.odometry_channel + ", publishing on " + options.output_channel);
+  app.status().set_state("waiting for frames on " + options.frames_channel);
+  app.status().publish(fact::app::now_us());
+  const int code = fact::app::run_loop(lcm, 10, [&](int64_t) { app.flush(false); });
+  app.flush(true);
+  log.event(std::string(code == 0 ? "stopped: " : "stopped (LCM failed): ") + app.summary());
+  app.status().set_state(code == 0 ? "stopped" : "LCM failed");
+  app.status().publish(fact::app::now_us());
+  return code;
+}

@@ -1,0 +1,230 @@
+// fact-detector as a process: --png-dir frames painted here (PNG pairs, intrinsics.json,
+// odometry.tum), detections received over LCM udpm:// by this process and checked against the
+// painted drone (one track, its id kept, its range and vector), the bad pair counted in the final
+// status; flags (--help, bad flags and an unloadable model → exit 2 with the reason).
+//
+// udpm never leaves the machine: main() re-executes this program through scripts/netns-run.sh
+// (FACT_NETNS_RUN) unless only lo is visible, as test_vio_relay.cpp does.
+#include "fact/app_status_t.hpp"
+#include "fact/camera.h"
+#include "fact/detections_t.hpp"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+bool only_loopback() {
+  std::ifstream dev("/proc/net/dev");
+  std::string line;
+  int n = 0;
+  while (std::getline(dev, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(' '));
+    if (name != "lo") return false;
+    ++n;
+  }
+  return n == 1;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Runs fact-detector with args; stderr to a file; returns the child's pid.
+pid_t spawn(const std::vector<std::string>& args, const fs::path& err) {
+  posix_spawn_file_actions_t a;
+  posix_spawn_file_actions_init(&a);
+  posix_spawn_file_actions_addopen(&a, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&a, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> words = {FACT_DETECTOR_BINARY};
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, FACT_DETECTOR_BINARY, &a, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&a);
+  return pid;
+}
+
+int exit_code(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+class DetectorApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("fact_detector_app_" + std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "png");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
+  const fact::CameraIntrinsics k = fact::d430_640x480();
+  {
+    std::ofstream j(dir_ / "png" / "intrinsics.json");
+    j << "{\"width\": 640, \"height\": 480, \"fx\": 387, \"fy\": 387, \"cx\": 321, \"cy\": 243}\n";
+    std::ofstream tum(dir_ / "png" / "odometry.tum");  // level, heading +x, for 2 s
+    for (int i = 0; i <= 200; ++i) tum << 1000.0 + i * 0.01 << " 0 0 1 0 0 0 1\n";
+  }
+  // A drone-sized blob (0.40 × 0.08 m) at z = 3 m, 0.5 m left of the axis, in front of a wall at 7 m.
+  const double z = 3.0, x = -0.5;
+  const Eigen::Vector2d c = fact::project(k, Eigen::Vector3d(x, 0, z));
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0, 1);
+  const int frames = 8;
+  for (int f = 0; f < frames; ++f) {
+    cv::Mat gray(480, 640, CV_8U, cv::Scalar(120)), depth(480, 640, CV_16U);
+    for (int v = 0; v < 480; ++v)
+      for (int u = 0; u < 640; ++u) depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(7000 + 60 * noise(rng)));
+    const int hw = static_cast<int>(0.20 * k.fx / z), hh = static_cast<int>(0.04 * k.fy / z);
+    const int cu = static_cast<int>(std::lround(c.x())), cv_ = static_cast<int>(std::lround(c.y()));
+    depth(cv::Rect(cu - hw, cv_ - hh, 2 * hw + 1, 2 * hh + 1)).setTo(3000);
+    const std::string t = std::to_string(int64_t(1000000000) + f * 66666);  // µs, ~15 Hz (odometry covers it)
+    cv::imwrite((dir_ / "png" / (t + "_gray.png")).string(), gray);
+    cv::imwrite((dir_ / "png" / (t + "_depth.png")).string(), depth);
+  }
+  // A bad pair: depth of another size.
+  cv::imwrite((dir_ / "png" / "1000999999_gray.png").string(), cv::Mat(480, 640, CV_8U, cv::Scalar(1)));
+  cv::imwrite((dir_ / "png" / "1000999999_depth.png").string(), cv::Mat(240, 320, CV_16U, cv::Scalar(1000)));
+
+  lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  std::vector<fact::detections_t> got;
+  std::vector<fact::app_status_t> status;
+  struct Sink {
+    std::vector<fact::detections_t>* got;
+    std::vector<fact::app_status_t>* status;
+    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
+    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
+  } sink{&got, &status};
+  lcm.subscribe("FACT_DETECTIONS_4", &Sink::det, &sink)->setQueueCapacity(100);
+  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
+  const pid_t pid = spawn({"--png-dir", (dir_ / "png").string(), "--drone-id", "4", "--lcm-url", kUrl}, dir_ / "err");
+  ASSERT_GT(pid, 0);
+  int code = -2;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::seconds(15)) {
+    lcm.handleTimeout(50);
+    int st = 0;
+    if (code == -2 && waitpid(pid, &st, WNOHANG) == pid) {
+      code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+      for (int i = 0; i < 10; ++i) lcm.handleTimeout(20);
+      break;
+    }
+  }
+  const std::string err = read_text(dir_ / "err");
+  ASSERT_EQ(code, 0) << err;
+  ASSERT_EQ(got.size(), static_cast<size_t>(frames)) << err;
+  int track = -1;
+  for (int f = 0; f < frames; ++f) {
+    EXPECT_EQ(got[f].drone_id, 4);
+    EXPECT_EQ(got[f].utime, int64_t(1000000000) + f * 66666);
+    if (f < 2) {  // tentative for the first two frames (confirm_hits 3)
+      EXPECT_EQ(got[f].count, 0);
+      continue;
+    }
+    ASSERT_EQ(got[f].count, 1) << "frame " << f;
+    const fact::detection_t& d = got[f].detections[0];
+    if (track < 0) track = d.track_id;
+    EXPECT_EQ(d.track_id, track);
+    // Expected: near surface at z = 3 m on the ray through the blob centre, + 0.17 m, then body frame.
+    const Eigen::Vector3d ray = fact::pixel_ray(k, d.box[0] + d.box[2] / 2, d.box[1] + d.box[3] / 2);
+    const Eigen::Vector3d p_b = fact::CameraExtrinsics().R_body_cam * (ray * (z / ray.z() + 0.17)) +
+                                fact::CameraExtrinsics().t_body_cam;
+    EXPECT_NEAR(d.range, p_b.norm(), 1e-6);
+    EXPECT_NEAR(d.vector[0], 3.0 + 0.1 + 0.17, 0.02);  // ahead
+    EXPECT_NEAR(d.vector[1], 0.5, 0.03);               // left (optical x = −0.5)
+    EXPECT_NEAR(d.vector[2], 0.0, 0.02);
+    EXPECT_GE(d.confidence, 0.9f);
+  }
+  ASSERT_FALSE(status.empty());
+  const fact::app_status_t& last = status.back();
+  auto counter = [&](const std::string& name) -> int64_t {
+    for (int i = 0; i < last.num_counters; ++i)
+      if (last.counter_names[i] == name) return last.counter_values[i];
+    return -1;
+  };
+  EXPECT_EQ(counter("size_mismatch"), 1) << err;
+  EXPECT_EQ(counter("published"), frames);
+  EXPECT_NE(err.find("size_mismatch"), std::string::npos) << err;
+  EXPECT_NE(err.find("gray 640 x 480, depth 320 x 240"), std::string::npos) << err;
+}
+
+TEST_F(DetectorApp, FlagsAndModelErrors) {
+  const pid_t help = spawn({"--help"}, dir_ / "help");
+  EXPECT_EQ(exit_code(help), 0);
+  const std::string missing = (dir_ / "no-such.onnx").string();
+  fs::path garbage = dir_ / "garbage.onnx";
+  std::ofstream(garbage) << "not a model";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--backend", "sift"}, "--backend: expected depth or yolo, got \"sift\""},
+      {{"--backend", "yolo"}, "--backend yolo needs --model FILE"},
+      {{"--backend", "yolo", "--model", missing}, missing},
+      {{"--backend", "yolo", "--model", garbage.string()}, garbage.string()},
+      {{"--smallest-percent", "0"}, "--smallest-percent"},
+      {{"--png-dir", missing}, "not a directory"},
+      {{"--drone-id", "-2"}, "--drone-id"},
+  };
+  int i = 0;
+  for (const auto& [args, reason] : cases) {
+    const fs::path err = dir_ / ("bad" + std::to_string(i++));
+    EXPECT_EQ(exit_code(spawn(args, err)), 2) << args[0];
+    const std::string text = read_text(err);
+    EXPECT_NE(text.find(reason), std::string::npos) << text;
+    EXPECT_EQ(text.rfind("fact-detector: error: ", 0), 0u) << text;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool listing = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
+  if (!listing && !only_loopback()) {
+    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
+    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+    std::vector<char*> argv2;
+    for (auto& w : words) argv2.push_back(w.data());
+    argv2.push_back(nullptr);
+    execv(FACT_NETNS_RUN, argv2.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
+    return 125;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
