@@ -494,17 +494,7 @@ std::string Gossip::add_own_round(int64_t now, int64_t utime, const DroneRound& 
     ++counters_.rejected_round_cap;
     return "own round " + std::to_string(p.round) + " is beyond the cap of " + std::to_string(opt_.max_rounds) + " rounds";
   }
-  Node& self = nodes_.at(opt_.self_id);
-  store(self, p, now);
-  ++counters_.own_rounds;
-  Held& h = *self.rounds[static_cast<size_t>(p.round)];
-  h.ever_sent = true;
-  h.last_sent = now;
-  Outgoing out;
-  out.kind = Outgoing::Kind::round;
-  out.packet = p;
-  outbox_.push_back(std::move(out));
-  ++counters_.rounds_sent;
+  store_and_send_own(p, now);
   event("own round " + std::to_string(p.round) + " closed: " + std::to_string(data.observations.size()) + " observations");
   return "";
 }
@@ -537,6 +527,13 @@ std::string Gossip::add_own_packet(int64_t now, const Packet& p) {
     event("own round " + std::to_string(p.round) + " given again with different content: the first is kept");
     return "own round " + std::to_string(p.round) + " is already held with different content";
   }
+  store_and_send_own(p, now);
+  return "";
+}
+
+// Stores one of this drone's own rounds and queues its first sending.
+void Gossip::store_and_send_own(const Packet& p, int64_t now) {
+  Node& self = nodes_.at(opt_.self_id);
   store(self, p, now);
   ++counters_.own_rounds;
   Held& h = *self.rounds[static_cast<size_t>(p.round)];
@@ -547,7 +544,6 @@ std::string Gossip::add_own_packet(int64_t now, const Packet& p) {
   out.packet = p;
   outbox_.push_back(std::move(out));
   ++counters_.rounds_sent;
-  return "";
 }
 
 std::vector<int> Gossip::wanted(int origin, int64_t now) const {

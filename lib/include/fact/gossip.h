@@ -264,6 +264,7 @@ class Gossip {
   Node* node(int id, int64_t now);            // creates (or refuses: nullptr) under the cap
   void hear(int id, int64_t now);
   std::string store(Node& n, const Packet& p, int64_t now);
+  void store_and_send_own(const Packet& p, int64_t now);
   std::vector<int> live_ids(int64_t now) const;
   std::vector<int> wanted(int origin, int64_t now) const;
   int next_own_round(int64_t now) const;
