@@ -14,6 +14,7 @@ packages=(
   iproute2                                  # private network namespaces for udpm tests
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-dnn-dev  # detector, PNG I/O
   python3-onnx python3-numpy                # tiny synthetic YOLO model, made at test time (/usr/bin/python3)
+  nodejs                                    # node-mavlink, the independent MAVLink decoder of the bridge test
   libsdpa-dev libsdp-dev coinor-csdp        # SDP peers, benchmark only (never linked into lib/ or apps/)
 )
 missing=()
@@ -27,4 +28,10 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
   echo "== dependencies present"
+fi
+# npm comes with some nodejs builds (NodeSource's) and separately with Debian's; add Debian's only if
+# there is none, so the two never collide.
+if ! command -v npm >/dev/null 2>&1; then
+  sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends npm
 fi

@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
               send(lcm, channel("FACT_SWARM_ROUNDS", id), s::swarm_rounds(t, id), status) &&
               send(lcm, channel("FACT_RESULT", id), s::swarm_result(t, id), status) &&
               send(lcm, "FACT_TRUTH", s::truth(t), status) &&
-              send(lcm, "FACT_SIM_CLOCK", s::sim_clock(t), status);
+              send(lcm, "FACT_SIM_CLOCK", s::sim_clock(t), status) &&
+              send(lcm, channel("FACT_FC_STATE", id), s::fc_state(t, id), status);
     if (!ok) {
       log.event("publish failed");
       return 1;

@@ -4,6 +4,7 @@
 
 #include "fact/app_status_t.hpp"
 #include "fact/detections_t.hpp"
+#include "fact/fc_state_t.hpp"
 #include "fact/frame_t.hpp"
 #include "fact/gossip_packet_t.hpp"
 #include "fact/gossip_request_t.hpp"
@@ -46,6 +47,31 @@ inline fact::setpoint_t setpoint(int64_t utime, int id) {
   }
   m.yaw = -1.0;
   m.yaw_rate = 0.3;
+  return m;
+}
+
+inline fact::fc_state_t fc_state(int64_t utime, int id) {
+  fact::fc_state_t m;
+  m.utime = utime;
+  m.drone_id = id;
+  m.connected = true;
+  m.armed = true;
+  m.offboard = false;
+  m.custom_mode = 6 << 16;
+  m.base_mode = 129;
+  m.system_status = 4;
+  m.heartbeat_age_ms = 120;
+  m.position_valid = true;
+  m.position_age_ms = 30;
+  m.position[0] = 1.0; m.position[1] = -2.0; m.position[2] = 1.5;
+  m.velocity[0] = 0.1; m.velocity[1] = 0.0; m.velocity[2] = -0.05;
+  m.attitude_valid = true;
+  m.attitude_age_ms = 10;
+  m.roll = 0.01; m.pitch = -0.02; m.yaw = 1.25;
+  m.streaming = true;
+  m.reason = "setpoints fresh";
+  m.setpoints_sent = 4200;
+  m.odometry_sent = 8400;
   return m;
 }
 

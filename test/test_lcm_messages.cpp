@@ -91,6 +91,7 @@ TEST(LcmMessages, EveryTypeRoundTripsThroughMemq) {
   round_trip(samples::odometry(t, 3), "FACT_ODOMETRY_3");
   round_trip(samples::setpoint(t, 3), "FACT_SETPOINT_3");
   round_trip(samples::sim_clock(t), "FACT_SIM_CLOCK");
+  round_trip(samples::fc_state(t, 3), "FACT_FC_STATE_3");
   round_trip(samples::detections(t, 3), "FACT_DETECTIONS_3");
   round_trip(samples::frame(t, 3), "FACT_FRAMES_3");
   round_trip(samples::gossip_packet(t, 3), "FACT_GOSSIP");

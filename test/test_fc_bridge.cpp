@@ -1,0 +1,496 @@
+// fact-fc-bridge as a real process. This program is the rest of the loop: it publishes setpoints
+// (LCM udpm), plays the flight controller on UDP 127.0.0.1 (HEARTBEAT, LOCAL_POSITION_NED,
+// ATTITUDE, malformed frames) and decodes what the bridge sends with fact_mavlink. Checks:
+// streaming stops when setpoints go stale or the FC heartbeat is lost (and restarts), NaN /
+// geofence / foreign / undecodable setpoints never reach the wire and are counted, malformed
+// MAVLink is counted by reason, fc_state carries the FC's state converted back to f_i, the serial
+// link works on a pseudo-terminal, and bad flags exit 2 with the reason.
+//
+// udpm must never leave the machine: main() re-executes this program through
+// scripts/netns-run.sh (FACT_NETNS_RUN) unless only lo is visible in /proc/net/dev.
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <pty.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "fact/app_status_t.hpp"
+#include "fact/fc_state_t.hpp"
+#include "fact/mavlink.h"
+#include "fact/mavlink_frames.h"
+#include "fact/setpoint_t.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace mav = fact::mavlink;
+constexpr double kPi = 3.14159265358979323846;
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+bool only_loopback() {
+  std::ifstream dev("/proc/net/dev");
+  std::string line;
+  int interfaces = 0;
+  while (std::getline(dev, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(' '));
+    if (name != "lo") return false;
+    ++interfaces;
+  }
+  return interfaces == 1;
+}
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The bridge process, stderr to a file.
+class Process {
+ public:
+  explicit Process(const std::vector<std::string>& args) {
+    err_ = fs::temp_directory_path() / ("fc_bridge_test_" + std::to_string(::getpid()) + "_" + std::to_string(++count_) + ".err");
+    posix_spawn_file_actions_t a;
+    posix_spawn_file_actions_init(&a);
+    posix_spawn_file_actions_addopen(&a, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&a, 1, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&a, 2, err_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    std::vector<std::string> words = {FACT_FC_BRIDGE_BINARY};
+    words.insert(words.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, FACT_FC_BRIDGE_BINARY, &a, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&a);
+  }
+  ~Process() {
+    if (pid_ > 0 && !done_) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+    std::error_code ec;
+    fs::remove(err_, ec);
+  }
+  int wait() {
+    if (pid_ > 0 && !done_) {
+      int st = 0;
+      ::waitpid(pid_, &st, 0);
+      done_ = true;
+      code_ = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    }
+    return code_;
+  }
+  int stop() {
+    if (pid_ > 0 && !done_) ::kill(pid_, SIGINT);
+    return wait();
+  }
+  std::string log() const { return read_text(err_); }
+
+ private:
+  static inline int count_ = 0;
+  fs::path err_;
+  pid_t pid_ = -1;
+  bool done_ = false;
+  int code_ = -1;
+};
+
+int run_to_exit(const std::vector<std::string>& args, std::string* log) {
+  Process p(args);
+  const int rc = p.wait();
+  *log = p.log();
+  return rc;
+}
+
+struct Received {
+  double t;  // s, steady clock
+  mav::Frame frame;
+};
+
+// The fake flight controller: a UDP socket on 127.0.0.1:port, talking to the bridge's port.
+class FakeFc {
+ public:
+  FakeFc(int port, int bridge_port) : encoder_({1, mav::kCompIdAutopilot}) {
+    fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    ok_ = fd_ >= 0 && ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    bridge_ = a;
+    bridge_.sin_port = htons(static_cast<uint16_t>(bridge_port));
+  }
+  ~FakeFc() { ::close(fd_); }
+  bool ok() const { return ok_; }
+  void send_bytes(const std::vector<uint8_t>& b) {
+    ::sendto(fd_, b.data(), b.size(), 0, reinterpret_cast<sockaddr*>(&bridge_), sizeof bridge_);
+  }
+  template <class M>
+  void send(const M& m) {
+    send_bytes(encoder_.encode(m));
+  }
+  void heartbeat(uint8_t base_mode = mav::kModeFlagCustomModeEnabled, uint32_t custom_mode = 0x00030000) {
+    mav::Heartbeat hb;
+    hb.type = mav::kMavTypeQuadrotor;
+    hb.autopilot = mav::kMavAutopilotPx4;
+    hb.base_mode = base_mode;
+    hb.custom_mode = custom_mode;
+    hb.system_status = 4;
+    send(hb);
+  }
+  void poll() {
+    uint8_t buf[4096];
+    for (;;) {
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) break;
+      const double t = now_s();
+      parser_.feed(buf, static_cast<std::size_t>(n), [&](const mav::Frame& f) { frames.push_back({t, f}); },
+                   [&](const mav::Rejection& r) { rejections.push_back(r.detail); });
+    }
+  }
+  int count(uint32_t msgid, double from = 0, double to = 1e300) const {
+    int n = 0;
+    for (const auto& r : frames)
+      if (r.frame.msgid == msgid && r.t >= from && r.t < to) ++n;
+    return n;
+  }
+  std::vector<Received> frames;
+  std::vector<std::string> rejections;
+
+ private:
+  int fd_ = -1;
+  bool ok_ = false;
+  sockaddr_in bridge_{};
+  mav::Encoder encoder_;
+  mav::Parser parser_;
+};
+
+// LCM side: publishes setpoints, hears fc_state and the bridge's status.
+class LcmSide {
+ public:
+  LcmSide() : lcm(kUrl) {
+    lcm.subscribe("FACT_FC_STATE_0", &LcmSide::on_state, this);
+    lcm.subscribe("FACT_STATUS", &LcmSide::on_status, this);
+  }
+  void on_state(const lcm::ReceiveBuffer*, const std::string&, const fact::fc_state_t* m) { states.push_back(*m); }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) {
+    if (m->app == "fact-fc-bridge") status = *m, have_status = true;
+  }
+  void pump() {
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+  int64_t counter(const std::string& name) const {
+    for (int i = 0; i < status.num_counters; ++i)
+      if (status.counter_names[i] == name) return status.counter_values[i];
+    return -1;
+  }
+  lcm::LCM lcm;
+  std::vector<fact::fc_state_t> states;
+  fact::app_status_t status;
+  bool have_status = false;
+};
+
+fact::setpoint_t setpoint(double x, double y, double z, double yaw = 0.5) {
+  fact::setpoint_t s{};
+  s.drone_id = 0;
+  s.position[0] = x;
+  s.position[1] = y;
+  s.position[2] = z;
+  s.velocity[0] = 0.1;
+  s.yaw = yaw;
+  return s;
+}
+
+void publish_sp(LcmSide& side, const fact::setpoint_t& s) { side.lcm.publish("FACT_SETPOINT_0", &s); }
+
+// Runs `every` about each ms for `seconds`, polling the FC socket and LCM.
+void run_for(double seconds, FakeFc& fc, LcmSide& side, const std::function<void(double t)>& every) {
+  const double start = now_s();
+  while (now_s() - start < seconds) {
+    every(now_s());
+    fc.poll();
+    side.pump();
+    ::usleep(1000);
+  }
+}
+
+std::vector<std::string> bridge_args(int port, int fc_port, const std::vector<std::string>& more) {
+  std::vector<std::string> a = {"--drone-id", "0", "--lcm-url", kUrl, "--udp",
+                                std::to_string(port) + ":127.0.0.1:" + std::to_string(fc_port), "--status-period", "0.2"};
+  a.insert(a.end(), more.begin(), more.end());
+  return a;
+}
+
+}  // namespace
+
+TEST(FcBridge, StreamingStopsOnStaleSetpointOrLostHeartbeatAndResumes) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15101, 15100);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15100, 15101, {"--setpoint-timeout", "0.3", "--heartbeat-timeout", "0.6"}));
+  ::usleep(200000);
+  double next_hb = 0, next_sp = 0;
+  bool send_sp = true, send_hb = true;
+  auto every = [&](double t) {
+    if (send_hb && t >= next_hb) fc.heartbeat(), next_hb = t + 0.1;
+    if (send_sp && t >= next_sp) publish_sp(side, setpoint(1, 2, 3)), next_sp = t + 0.05;
+  };
+  const double t0 = now_s();
+  run_for(1.0, fc, side, every);  // A: both fresh
+  const double a_end = now_s();
+  EXPECT_GE(fc.count(84, a_end - 0.5, a_end), 18);  // 50 Hz
+  send_sp = false;                  // B: setpoints stop
+  const double b_start = now_s();
+  run_for(1.0, fc, side, every);
+  EXPECT_EQ(fc.count(84, b_start + 0.3 + 0.12, now_s()), 0) << "still streaming on a stale setpoint";
+  send_sp = true;                   // C: setpoints again
+  run_for(0.8, fc, side, every);
+  const double c_end = now_s();
+  EXPECT_GE(fc.count(84, c_end - 0.4, c_end), 14);
+  send_hb = false;                  // D: FC heartbeat lost
+  const double d_start = now_s();
+  run_for(1.3, fc, side, every);
+  EXPECT_EQ(fc.count(84, d_start + 0.6 + 0.15, now_s()), 0) << "still streaming without the FC heartbeat";
+  EXPECT_GE(fc.count(0, d_start + 0.5, now_s()), 1) << "our own HEARTBEAT must go on";
+  EXPECT_EQ(bridge.stop(), 0);
+  const std::string log = bridge.log();
+  EXPECT_NE(log.find("streaming stopped: setpoint stale"), std::string::npos) << log;
+  EXPECT_NE(log.find("streaming stopped: flight-controller heartbeat lost"), std::string::npos) << log;
+  bool saw_stale = false, saw_lost = false, saw_streaming = false;
+  for (const auto& s : side.states) {
+    saw_stale |= !s.streaming && s.reason.find("setpoint stale") != std::string::npos;
+    saw_lost |= !s.streaming && s.reason.find("heartbeat lost") != std::string::npos && !s.connected;
+    saw_streaming |= s.streaming && s.connected && s.reason == "streaming";
+  }
+  EXPECT_TRUE(saw_stale && saw_lost && saw_streaming) << side.states.size() << " fc_state messages";
+  // Every SET_POSITION_TARGET_LOCAL_NED carries the f_i setpoint (1, 2, 3) in NED.
+  for (const auto& r : fc.frames) {
+    mav::SetPositionTargetLocalNed m;
+    if (!mav::decode(r.frame, &m)) continue;
+    EXPECT_FLOAT_EQ(m.x, 2);
+    EXPECT_FLOAT_EQ(m.y, 1);
+    EXPECT_FLOAT_EQ(m.z, -3);
+    EXPECT_FLOAT_EQ(m.yaw, static_cast<float>(kPi / 2 - 0.5));
+  }
+  (void)t0;
+}
+
+TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15111, 15110);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15110, 15111, {"--geofence", "-10,10,-10,10,0,5"}));
+  ::usleep(200000);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<fact::setpoint_t> bad = {setpoint(nan, 0, 1), setpoint(0, 0, 1, nan), setpoint(11, 0, 1),
+                                       setpoint(0, 0, 6), setpoint(0, -20, 1), setpoint(0, 0, -0.5)};
+  bad[1].velocity[2] = inf;
+  fact::setpoint_t foreign = setpoint(1, 1, 1);
+  foreign.drone_id = 4;
+  int step = 0;
+  double next = 0, next_hb = 0;
+  run_for(1.5, fc, side, [&](double t) {
+    if (t >= next_hb) fc.heartbeat(), next_hb = t + 0.1;
+    if (t < next) return;
+    next = t + 0.02;
+    const int i = step++;
+    if (i % 4 == 0) {
+      publish_sp(side, setpoint(1, -2, 4));
+    } else if (i % 4 == 1) {
+      side.lcm.publish("FACT_SETPOINT_0", &bad[static_cast<std::size_t>(i / 4) % bad.size()]);
+    } else if (i % 4 == 2) {
+      side.lcm.publish("FACT_SETPOINT_0", &foreign);
+    } else {
+      const uint8_t junk[5] = {1, 2, 3, 4, 5};
+      side.lcm.publish("FACT_SETPOINT_0", junk, sizeof junk);
+    }
+  });
+  EXPECT_EQ(bridge.stop(), 0);
+  ::usleep(100000);
+  side.pump();
+  int spt = 0;
+  for (const auto& r : fc.frames) {
+    mav::SetPositionTargetLocalNed m;
+    if (!mav::decode(r.frame, &m)) continue;
+    ++spt;
+    EXPECT_FLOAT_EQ(m.x, -2);  // f_i (1, -2, 4) -> NED (-2, 1, -4)
+    EXPECT_FLOAT_EQ(m.y, 1);
+    EXPECT_FLOAT_EQ(m.z, -4);
+    EXPECT_FLOAT_EQ(m.vx, 0);
+    EXPECT_FLOAT_EQ(m.vy, 0.1f);
+    EXPECT_TRUE(std::isfinite(m.yaw) && std::isfinite(m.vz));
+  }
+  EXPECT_GE(spt, 40);
+  ASSERT_TRUE(side.have_status);
+  EXPECT_EQ(side.status.state, "stopped");
+  EXPECT_GE(side.counter("rejected_nan"), 5);
+  EXPECT_GE(side.counter("rejected_geofence"), 7);
+  EXPECT_GE(side.counter("rejected_drone_id"), 15);
+  EXPECT_GE(side.counter("undecodable"), 15);
+  const std::string log = bridge.log();
+  EXPECT_NE(log.find("rejected: setpoint position[0] = nan is not finite"), std::string::npos) << log;
+  EXPECT_NE(log.find("rejected: setpoint velocity[2] = inf is not finite"), std::string::npos) << log;
+  EXPECT_NE(log.find("rejected: setpoint position[2] = 6 m outside the geofence z [0, 5] m"), std::string::npos) << log;
+  EXPECT_NE(log.find("rejected: setpoint drone_id = 4"), std::string::npos) << log;
+}
+
+TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15121, 15120);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15120, 15121, {"--arm", "--offboard"}));
+  ::usleep(200000);
+  mav::Encoder enc({1, 1});
+  auto bad_crc = enc.encode(mav::LocalPositionNed{});
+  bad_crc[12] ^= 0x40;
+  std::array<uint8_t, 20> p{};
+  p.fill(7);
+  auto unknown = mav::frame_bytes(1, 124, p.data(), p.size(), 0, {1, 1});
+  auto too_long = mav::frame_bytes(0, mav::Heartbeat::kCrcExtra, p.data(), p.size(), 0, {1, 1});
+  auto signed_frame = enc.encode(mav::Heartbeat{});
+  signed_frame[2] = mav::kIncompatSigned;
+  signed_frame.insert(signed_frame.end(), 13, 0);
+  mav::LocalPositionNed pos;
+  pos.x = 2; pos.y = 1; pos.z = -3; pos.vx = 0.5; pos.vy = -0.5; pos.vz = 0.25;
+  mav::Attitude att;
+  att.roll = 0.1f; att.pitch = 0.2f; att.yaw = 0;
+  double next = 0, next_sp = 0;
+  run_for(1.5, fc, side, [&](double t) {
+    if (t >= next_sp) publish_sp(side, setpoint(0, 0, 1)), next_sp = t + 0.05;
+    if (t < next) return;
+    next = t + 0.1;
+    fc.heartbeat(mav::kModeFlagCustomModeEnabled | mav::kModeFlagSafetyArmed, mav::kPx4MainModeOffboard << 16);
+    fc.send(pos);
+    fc.send(att);
+    for (const std::vector<uint8_t>* b : {&bad_crc, &unknown, &too_long, &signed_frame}) fc.send_bytes(*b);
+  });
+  EXPECT_EQ(bridge.stop(), 0);
+  ::usleep(100000);
+  side.pump();
+  ASSERT_TRUE(side.have_status);
+  EXPECT_GE(side.counter("mavlink_bad_crc"), 10);
+  EXPECT_GE(side.counter("mavlink_unknown_id"), 10);
+  EXPECT_GE(side.counter("mavlink_bad_length"), 10);
+  EXPECT_GE(side.counter("mavlink_signed_frame"), 10);
+  EXPECT_GE(side.counter("fc_heartbeats"), 10);
+  EXPECT_GE(side.counter("setpoints_sent"), 40);
+  EXPECT_EQ(side.counter("commands_sent"), 0) << "the FC already reports armed + offboard";
+  EXPECT_EQ(fc.count(76), 0);
+  ASSERT_FALSE(side.states.empty());
+  const fact::fc_state_t& s = side.states.back();
+  EXPECT_TRUE(s.connected);
+  EXPECT_TRUE(s.armed);
+  EXPECT_TRUE(s.offboard);
+  EXPECT_TRUE(s.position_valid && s.attitude_valid);
+  EXPECT_NEAR(s.position[0], 1, 1e-6);  // NED (2, 1, -3) -> f_i (1, 2, 3)
+  EXPECT_NEAR(s.position[1], 2, 1e-6);
+  EXPECT_NEAR(s.position[2], 3, 1e-6);
+  EXPECT_NEAR(s.velocity[0], -0.5, 1e-6);
+  EXPECT_NEAR(s.velocity[1], 0.5, 1e-6);
+  EXPECT_NEAR(s.velocity[2], -0.25, 1e-6);
+  EXPECT_NEAR(s.roll, 0.1, 1e-6);
+  EXPECT_NEAR(s.pitch, -0.2, 1e-6);
+  EXPECT_NEAR(s.yaw, kPi / 2, 1e-6);  // facing north
+  EXPECT_GE(s.setpoints_sent, 40);
+  const std::string log = bridge.log();
+  EXPECT_NE(log.find("bad CRC on msgid 32 (LOCAL_POSITION_NED)"), std::string::npos) << log;
+  EXPECT_NE(log.find("unknown msgid 1"), std::string::npos) << log;
+  EXPECT_NE(log.find("payload 20 bytes, at most 9"), std::string::npos) << log;
+  EXPECT_NE(log.find("signing is not supported"), std::string::npos) << log;
+}
+
+TEST(FcBridge, SerialLinkOnAPseudoTerminal) {
+  int master = -1, slave = -1;
+  char name[128] = {};
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  Process bridge({"--drone-id", "0", "--lcm-url", "memq://", "--serial", name, "--baud", "57600"});
+  mav::Parser parser;
+  std::vector<mav::Frame> frames;
+  const double start = now_s();
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  while (now_s() - start < 1.5 && frames.empty()) {
+    uint8_t buf[512];
+    const ssize_t n = ::read(master, buf, sizeof buf);
+    if (n > 0) parser.feed(buf, static_cast<std::size_t>(n), [&](const mav::Frame& f) { frames.push_back(f); }, nullptr);
+    ::usleep(5000);
+  }
+  EXPECT_EQ(bridge.stop(), 0);
+  ::close(slave);
+  ::close(master);
+  ASSERT_FALSE(frames.empty()) << bridge.log();
+  mav::Heartbeat hb;
+  ASSERT_TRUE(mav::decode(frames[0], &hb));
+  EXPECT_EQ(hb.type, mav::kMavTypeOnboardController);
+  EXPECT_NE(bridge.log().find("57600 8N1"), std::string::npos) << bridge.log();
+}
+
+TEST(FcBridge, FlagsAndLinkErrors) {
+  std::string log;
+  EXPECT_EQ(run_to_exit({"--help"}, &log), 0);
+  EXPECT_NE(log.find("--geofence"), std::string::npos);
+  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://"}, &log), 2);
+  EXPECT_NE(log.find("exactly one of --udp and --serial"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--serial", "/dev/null", "--baud", "12345"}, &log), 2);
+  EXPECT_NE(log.find("--baud: 12345 is not a supported rate"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "14540:127.0.0.1:99999"}, &log), 2);
+  EXPECT_NE(log.find("remote port '99999'"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--geofence", "1,2,3"}, &log), 2);
+  EXPECT_NE(log.find("--geofence: expected 6 numbers"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--stream-rate", "2"}, &log), 2);
+  EXPECT_NE(log.find("more than 2 Hz"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--sysid", "0"}, &log), 2);
+  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/nonexistent/ttyFACT"}, &log), 1);
+  EXPECT_NE(log.find("cannot open serial device '/nonexistent/ttyFACT'"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/dev/null"}, &log), 1);
+  EXPECT_NE(log.find("is not a serial device"), std::string::npos) << log;
+}
+
+int main(int argc, char** argv) {
+  bool listing = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
+  if (!listing && !only_loopback()) {
+    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
+    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+    std::vector<char*> argv2;
+    for (auto& w : words) argv2.push_back(w.data());
+    argv2.push_back(nullptr);
+    execv(FACT_NETNS_RUN, argv2.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
+    return 125;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
