@@ -229,10 +229,11 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
       auto truncated = [&](const fact::sim::TargetTruth& tt) {
         return tt.u_min <= 0 || tt.v_min <= 0 || tt.u_max >= k.width - 1 || tt.v_max >= k.height - 1;
       };
-      auto eligible = [&](const fact::sim::TargetTruth& tt) {
-        return tt.center_in_image && tt.line_of_sight && tt.visible_pixels > 0 && tt.range <= o.eligible_range &&
-               !truncated(tt);
+      // Unoccluded and in full view, at any range (the per-bin curves); eligible: also within range.
+      auto unoccluded = [&](const fact::sim::TargetTruth& tt) {
+        return tt.center_in_image && tt.line_of_sight && tt.visible_pixels > 0 && !truncated(tt);
       };
+      auto eligible = [&](const fact::sim::TargetTruth& tt) { return unoccluded(tt) && tt.range <= o.eligible_range; };
       const std::vector<int> m = match_boxes(dets, visible);
       std::vector<bool> found(truth.size(), false), found_any(truth.size(), false);
       for (size_t d = 0; d < dets.size(); ++d) {
@@ -261,7 +262,7 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
         ++b.truthful;
         const fact::sim::TargetTruth& tt = truth[visible_truth[m[d]]];
         found[visible_truth[m[d]]] = true;
-        if (!eligible(tt) || !tv.valid) continue;
+        if (!unoccluded(tt) || !tv.valid) continue;
         Bin& tb = c->bins[bin_of(tt.range, o)];
         tb.range_err.push_back(std::abs(tv.range - tt.range) / tt.range);
         const double cosang = tv.vector_g.normalized().dot(tt.vector_g.normalized());
@@ -272,7 +273,7 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
         if (tt.center_in_image && tt.line_of_sight && tt.visible_pixels > 0 && tt.range <= o.eligible_range &&
             truncated(tt))
           ++c->truncated, c->truncated_found += found_any[j];
-        if (!eligible(truth[j])) continue;
+        if (!unoccluded(truth[j])) continue;
         Bin& b = c->bins[bin_of(truth[j].range, o)];
         ++b.eligible;
         if (found[j]) ++b.found;

@@ -15,6 +15,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-dnn-dev  # detector, PNG I/O
   python3-onnx python3-numpy                # tiny synthetic YOLO model, made at test time (/usr/bin/python3)
   nodejs                                    # node-mavlink, the independent MAVLink decoder of the bridge test
+  libccd-dev                                # planner: GJK/EPA penetration depth (lib/planner)
   libsdpa-dev libsdp-dev coinor-csdp        # SDP peers, benchmark only (never linked into lib/ or apps/)
 )
 missing=()

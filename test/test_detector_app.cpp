@@ -8,6 +8,7 @@
 #include "fact/app_status_t.hpp"
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
+#include "fact/frame_t.hpp"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -15,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -153,7 +155,7 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
   for (int f = 0; f < frames; ++f) {
     EXPECT_EQ(got[f].drone_id, 4);
     EXPECT_EQ(got[f].utime, int64_t(1000000000) + f * 66666);
-    if (f < 2) {  // tentative for the first two frames (confirm_hits 3)
+    if (f < 1) {  // tentative in the first frame (confirm_hits 2)
       EXPECT_EQ(got[f].count, 0);
       continue;
     }
@@ -207,6 +209,105 @@ TEST_F(DetectorApp, FlagsAndModelErrors) {
     EXPECT_NE(text.find(reason), std::string::npos) << text;
     EXPECT_EQ(text.rfind("fact-detector: error: ", 0), 0u) << text;
   }
+}
+
+// Frames over LCM: good ones are processed and published; each kind of bad frame (wrong size,
+// missing intrinsics, all-invalid depth, gray and depth of different sizes, another drone's frame,
+// a truncated message) is counted under its own name and logged, and the app keeps running.
+TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
+  const std::string url = kUrl + "&recv_buf_size=4194304";
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  std::vector<fact::detections_t> got;
+  std::vector<fact::app_status_t> status;
+  struct Sink {
+    std::vector<fact::detections_t>* got;
+    std::vector<fact::app_status_t>* status;
+    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
+    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
+  } sink{&got, &status};
+  lcm.subscribe("FACT_DETECTIONS_2", &Sink::det, &sink)->setQueueCapacity(100);
+  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
+  const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", url, "--status-period", "0.2"}, dir_ / "err");
+  ASSERT_GT(pid, 0);
+  auto pump = [&](int ms) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+    while (std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
+  };
+  pump(500);  // the app subscribes
+  const fact::CameraIntrinsics k = fact::d430_424x240();
+  auto frame = [&](int64_t seq) {
+    fact::frame_t m;
+    m.utime = 2000000000 + seq * 66666;
+    m.drone_id = 2;
+    m.seq = seq;
+    m.width = k.width;
+    m.height = k.height;
+    m.fx = k.fx, m.fy = k.fy, m.cx = k.cx, m.cy = k.cy;
+    m.gray_size = m.depth_size = k.width * k.height;
+    m.gray.assign(static_cast<size_t>(m.gray_size), 100);
+    m.depth_mm.assign(static_cast<size_t>(m.depth_size), 6000);  // a wall at 6 m: nothing to detect
+    return m;
+  };
+  int64_t seq = 0;
+  auto good = [&]() {
+    fact::frame_t m = frame(seq++);
+    lcm.publish("FACT_FRAMES_2", &m);
+    pump(100);
+  };
+  good();
+  fact::frame_t m = frame(seq++);
+  m.width = 100;  // wrong size for the buffers
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  m = frame(seq++);
+  m.fx = std::nan("");  // missing intrinsics
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  m = frame(seq++);
+  std::fill(m.depth_mm.begin(), m.depth_mm.end(), 0);  // all-invalid depth
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  m = frame(seq++);
+  m.depth_size = m.gray_size / 4;  // depth of another size than gray
+  m.depth_mm.resize(static_cast<size_t>(m.depth_size));
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  m = frame(seq++);
+  m.drone_id = 3;  // another drone's frame
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  {
+    m = frame(seq++);
+    std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    lcm.publish("FACT_FRAMES_2", bytes.data(), static_cast<unsigned>(bytes.size() / 2));  // truncated
+  }
+  good();
+  pump(1200);
+  kill(pid, SIGTERM);
+  const int code = exit_code(pid);
+  pump(300);
+  const std::string err = read_text(dir_ / "err");
+  EXPECT_EQ(code, 0) << err;
+  ASSERT_FALSE(status.empty()) << err;
+  const fact::app_status_t& last = status.back();
+  auto counter = [&](const std::string& name) -> int64_t {
+    for (int i = 0; i < last.num_counters; ++i)
+      if (last.counter_names[i] == name) return last.counter_values[i];
+    return -1;
+  };
+  EXPECT_EQ(counter("published"), 7) << err;  // every good frame, also the ones after bad ones
+  EXPECT_EQ(counter("bad_frame"), 1) << err;
+  EXPECT_EQ(counter("bad_intrinsics"), 1) << err;
+  EXPECT_EQ(counter("no_depth"), 1) << err;
+  EXPECT_EQ(counter("size_mismatch"), 1) << err;
+  EXPECT_EQ(counter("wrong_drone_id"), 1) << err;
+  EXPECT_EQ(counter("undecodable"), 1) << err;
+  EXPECT_EQ(got.size(), 7u) << err;
+  for (const auto& d : got) EXPECT_EQ(d.count, 0);  // a bare wall holds no drone
+  EXPECT_NE(err.find("fx"), std::string::npos) << err;
+  EXPECT_NE(err.find("drone_id = 3"), std::string::npos) << err;
 }
 
 }  // namespace

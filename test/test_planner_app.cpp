@@ -1,0 +1,516 @@
+// Tests of fact-planner as a real process over LCM udpm://, inside a private network namespace:
+// main() re-executes this program through scripts/netns-run.sh (FACT_NETNS_RUN) unless it already
+// sees no interface but lo; listing the tests needs no namespace.
+//
+// The test is the rest of the drone: a tiny kinematic integrator follows the published setpoints
+// (feed-forward velocity + a proportional pull) and publishes it as odometry at 50 Hz; two other
+// drones stand at known positions in f_0 and become detections (body-frame vectors with the current
+// yaw) whenever they are within ±40° of the heading, with a matching small depth frame for the map;
+// swarm_rounds_t and swarm_result_t are published when the planner says it waits for them.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <net/if.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/convert.h"
+#include "fact/app_status_t.hpp"
+#include "fact/detections_t.hpp"
+#include "fact/frame_t.hpp"
+#include "fact/odometry_t.hpp"
+#include "fact/setpoint_t.hpp"
+#include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using Eigen::Vector3d;
+
+const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
+constexpr double kPi = 3.14159265358979323846;
+
+bool only_loopback() {
+  struct if_nameindex* names = if_nameindex();
+  if (names == nullptr) return false;
+  bool only_lo = true;
+  for (struct if_nameindex* i = names; i->if_index != 0; ++i)
+    if (std::string(i->if_name) != "lo") only_lo = false;
+  if_freenameindex(names);
+  return only_lo;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A child process (stdin /dev/null, stderr to a file); SIGTERM then SIGKILL when destroyed.
+class Process {
+ public:
+  Process(std::vector<std::string> words, const fs::path& err) : err_(err) {
+    posix_spawn_file_actions_t a;
+    posix_spawn_file_actions_init(&a);
+    posix_spawn_file_actions_addopen(&a, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&a, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&a, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<char*> argv;
+    for (std::string& w : words) argv.push_back(w.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, words[0].c_str(), &a, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&a);
+  }
+  ~Process() {
+    if (running()) {
+      kill(pid_, SIGTERM);
+      if (wait_for(std::chrono::seconds(3)) == -2) {
+        kill(pid_, SIGKILL);
+        wait_for(std::chrono::seconds(3));
+      }
+    }
+  }
+  bool started() const { return pid_ > 0; }
+  bool running() {
+    if (pid_ <= 0 || done_) return false;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) == 0) return true;
+    done_ = true;
+    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return false;
+  }
+  // The exit code, −1 if killed by a signal, −2 if still running after `limit`.
+  int wait_for(Clock::duration limit) {
+    const auto end = Clock::now() + limit;
+    while (running()) {
+      if (Clock::now() >= end) return -2;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return code_;
+  }
+  int stop() {
+    if (running()) kill(pid_, SIGTERM);
+    return wait_for(std::chrono::seconds(5));
+  }
+  std::string err() const { return read_text(err_); }
+
+ private:
+  pid_t pid_ = -1;
+  bool done_ = false;
+  int code_ = -2;
+  fs::path err_;
+};
+
+int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+int64_t counter(const fact::app_status_t& s, const std::string& name) {
+  for (int i = 0; i < s.num_counters; ++i)
+    if (s.counter_names[i] == name) return s.counter_values[i];
+  return -1;
+}
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+// The drone and its surroundings, as seen by fact-planner 0.
+class World {
+ public:
+  // Other drones' true positions in f_0, and their frames (yaw, origin) in f_0 (the reference).
+  std::vector<Vector3d> others = {Vector3d(3.0, 0.5, 1.4), Vector3d(-0.5, -2.8, 1.5)};
+  std::vector<std::pair<double, Vector3d>> frames = {{0.7, Vector3d(1.0, 2.0, 0.0)}, {-1.2, Vector3d(-2.0, 0.5, 0.0)}};
+
+  World() : lcm_(kUrl) {
+    lcm_.subscribe("FACT_SETPOINT_0", &World::on_setpoint, this);
+    lcm_.subscribe("FACT_STATUS", &World::on_status, this);
+  }
+  bool good() { return lcm_.good(); }
+  lcm::LCM& lcm() { return lcm_; }
+
+  Vector3d pos = Vector3d::Zero();
+  double yaw = 0.3;
+  bool odometry_on = true;
+  std::vector<std::pair<int64_t, fact::setpoint_t>> setpoints;  // (arrival, message)
+  std::string state;                                            // newest status state of fact-planner 0
+  fact::app_status_t status;
+  std::function<void(const std::string&)> on_state;  // called on each new state
+  std::function<void()> on_step;                      // called after each integrator step
+
+  // Runs the world for up to `limit`, until `done()`.
+  bool run(const std::function<bool()>& done, Clock::duration limit) {
+    const auto end = Clock::now() + limit;
+    auto last = Clock::now();
+    while (!done()) {
+      if (Clock::now() >= end) return false;
+      lcm_.handleTimeout(2);
+      const auto now = Clock::now();
+      const double dt = std::chrono::duration<double>(now - last).count();
+      if (dt < 0.005) continue;
+      last = now;
+      step(dt);
+    }
+    return true;
+  }
+
+  void publish_odometry(double x, double y, double z, double yaw_value, int drone = 0) {
+    fact::odometry_t m{};
+    m.utime = wall_us();
+    m.drone_id = drone;
+    m.seq = seq_++;
+    m.position[0] = x;
+    m.position[1] = y;
+    m.position[2] = z;
+    m.yaw = yaw_value;
+    lcm_.publish("FACT_ODOMETRY_0", &m);
+  }
+
+  // Complete rounds 0 … k−1 of drones 0, 1, 2: each drone's round start in its own frame.
+  void publish_rounds(int k) {
+    fact::Rounds r;
+    r.drones = {0, 1, 2};
+    for (int i = 0; i < k; ++i) {
+      fact::Round round;
+      round.index = i;
+      round.drones[0].position = pos;
+      round.drones[0].yaw = yaw;
+      for (int j = 0; j < 2; ++j) {
+        const auto& [fyaw, ft] = frames[j];
+        round.drones[j + 1].position = Eigen::AngleAxisd(-fyaw, Vector3d::UnitZ()) * (others[j] - ft);
+        round.drones[j + 1].yaw = 0.1 * j;
+      }
+      r.rounds.push_back(round);
+    }
+    fact::swarm_rounds_t m = fact::app::rounds_to_message(r, 0, wall_us());
+    lcm_.publish("FACT_SWARM_ROUNDS_0", &m);
+  }
+
+  void publish_result(const std::string& status, int rounds_used) {
+    fact::swarm_result_t m{};
+    m.utime = wall_us();
+    m.drone_id = 0;
+    m.mode = "associated";
+    m.status = status;
+    m.reason = status == "certified" ? "" : "test: rotation-symmetric formation";
+    m.reference = 0;
+    m.rounds_used = rounds_used;
+    m.num_drones = 3;
+    m.drones.resize(3);
+    for (int j = 0; j < 3; ++j) {
+      m.drones[j].id = j;
+      m.drones[j].resolved = true;
+      const double fyaw = j == 0 ? 0.0 : frames[j - 1].first;
+      const Vector3d ft = j == 0 ? Vector3d::Zero() : frames[j - 1].second;
+      m.drones[j].yaw = fyaw;
+      for (int k = 0; k < 3; ++k) m.drones[j].position[k] = ft[k];
+    }
+    m.rank = 2;
+    lcm_.publish("FACT_RESULT_0", &m);
+  }
+
+ private:
+  void step(double dt) {
+    if (!setpoints.empty()) {  // follow the newest setpoint: feed-forward + proportional pull
+      const fact::setpoint_t& s = setpoints.back().second;
+      for (int k = 0; k < 3; ++k) pos[k] += (s.velocity[k] + 8.0 * (s.position[k] - pos[k])) * dt;
+      yaw += (s.yaw_rate + 8.0 * (s.yaw - yaw)) * dt;
+    }
+    const int64_t now = wall_us();
+    if (odometry_on && now - last_odometry_ >= 20000) {
+      last_odometry_ = now;
+      fact::odometry_t m{};
+      m.utime = now;
+      m.drone_id = 0;
+      m.seq = seq_++;
+      for (int k = 0; k < 3; ++k) m.position[k] = pos[k];
+      m.yaw = yaw;
+      lcm_.publish("FACT_ODOMETRY_0", &m);
+    }
+    if (odometry_on && now - last_detection_ >= 33000) {
+      last_detection_ = now;
+      publish_detections(now);
+    }
+    if (on_step) on_step();
+  }
+
+  // Detections of the other drones within ±40° of the heading, and a small depth frame whose only
+  // valid pixels lie inside their boxes (so the map must remove them all).
+  void publish_detections(int64_t now) {
+    fact::detections_t d{};
+    d.utime = now;
+    d.drone_id = 0;
+    d.frame_seq = frame_seq_;
+    fact::frame_t f{};
+    f.utime = now;
+    f.drone_id = 0;
+    f.seq = frame_seq_++;
+    f.width = 80;
+    f.height = 60;
+    f.fx = f.fy = 60;
+    f.cx = 40;
+    f.cy = 30;
+    f.gray_size = f.depth_size = 80 * 60;
+    f.gray.assign(80 * 60, 100);
+    f.depth_mm.assign(80 * 60, 0);
+    const Eigen::Matrix3d Rt = Eigen::AngleAxisd(-yaw, Vector3d::UnitZ()).toRotationMatrix();
+    for (size_t j = 0; j < others.size(); ++j) {
+      const Vector3d rel = others[j] - pos;
+      if (std::abs(wrap(std::atan2(rel.y(), rel.x()) - yaw)) > 40 * kPi / 180) continue;
+      const Vector3d v = Rt * rel;
+      fact::detection_t e{};
+      e.track_id = 100 + static_cast<int>(j);
+      for (int k = 0; k < 3; ++k) e.vector[k] = v[k];
+      const float u = static_cast<float>(40 - 60 * v.y() / v.x()), w = 12;
+      e.box[0] = u - w / 2;
+      e.box[1] = 24;
+      e.box[2] = w;
+      e.box[3] = w;
+      e.confidence = 0.9f;
+      e.range = v.norm();
+      d.detections.push_back(e);
+      for (int r = 26; r < 34; ++r)
+        for (int c = std::max(0, int(u) - 4); c < std::min(80, int(u) + 4); ++c) f.depth_mm[r * 80 + c] = int16_t(v.x() * 1000);
+    }
+    d.count = static_cast<int32_t>(d.detections.size());
+    lcm_.publish("FACT_DETECTIONS_0", &d);
+    lcm_.publish("FACT_FRAMES_0", &f);
+  }
+
+  void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    fact::setpoint_t m;
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) != static_cast<int>(rbuf->data_size)) return;
+    setpoints.emplace_back(wall_us(), m);
+  }
+  void on_status(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    fact::app_status_t m;
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) != static_cast<int>(rbuf->data_size)) return;
+    if (m.app != "fact-planner" || m.drone_id != 0) return;
+    status = m;
+    if (m.state != state) {
+      state = m.state;
+      if (on_state) on_state(state);
+    }
+  }
+
+  lcm::LCM lcm_;
+  int64_t seq_ = 0, frame_seq_ = 0, last_odometry_ = 0, last_detection_ = 0;
+};
+
+bool starts_with(const std::string& s, const std::string& p) { return s.rfind(p, 0) == 0; }
+
+class PlannerApp : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!only_loopback()) GTEST_SKIP() << "not in a private network namespace: run through scripts/netns-run.sh";
+    std::string pattern = (fs::temp_directory_path() / "fact-planner-app-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override {
+    if (process_ && (HasFailure() || std::getenv("FACT_TEST_VERBOSE"))) std::fprintf(stderr, "fact-planner stderr:\n%s\n", process_->err().c_str());
+    process_.reset();
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+  // Fast spins and moves keep the test short; random moves off so the target rule is checked.
+  Process& start(std::vector<std::string> extra) {
+    std::vector<std::string> w = {FACT_PLANNER_BINARY, "--drone-id", "0", "--lcm-url", kUrl, "--status-period", "0.1",
+                                  "--seed", "7", "--spin-rate", "6", "--yaw-accel", "20", "--v-max", "2", "--a-max",
+                                  "6", "--random-move-probability", "0"};
+    w.insert(w.end(), extra.begin(), extra.end());
+    process_ = std::make_unique<Process>(w, dir_ / "planner.err");
+    EXPECT_TRUE(process_->started());
+    return *process_;
+  }
+  fs::path dir_;
+  std::unique_ptr<Process> process_;
+};
+
+// Takeoff, spin, an ambiguous result → a deliberate move within the max-move bound, a second spin,
+// a certified result → hold; stale odometry → hover with the reason; NaN / foreign / garbage input
+// counted; SIGTERM → exit 0.
+TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({});
+  std::vector<std::string> states;
+  int64_t takeoff_end_check = 0;
+  double spin0_yaw = NAN, spin0_end_yaw = NAN;
+  Vector3d move_start = Vector3d::Constant(NAN), move_end = Vector3d::Constant(NAN);
+  double min_sep_during_move = std::numeric_limits<double>::infinity();
+  bool moving = false;
+  w.on_state = [&](const std::string& s) {
+    states.push_back(s);
+    auto yaw_sp = [&] { return w.setpoints.empty() ? NAN : w.setpoints.back().second.yaw; };
+    if (starts_with(s, "spin round 0") && std::isnan(spin0_yaw)) {
+      spin0_yaw = yaw_sp();
+      EXPECT_GE(w.pos.z(), 1.2 - 0.05) << "takeoff below the window";
+      EXPECT_LE(w.pos.z(), 1.6 + 0.05) << "takeoff above the window";
+      takeoff_end_check = 1;
+    }
+    if (starts_with(s, "wait round 0") && std::isnan(spin0_end_yaw)) {
+      spin0_end_yaw = yaw_sp();
+      w.publish_rounds(1);
+      w.publish_result("ambiguous", 1);
+    }
+    if (starts_with(s, "move round 1") && !moving && std::isnan(move_start.x())) {
+      move_start = w.pos;
+      moving = true;
+    }
+    if (starts_with(s, "spin round 1") && moving) {
+      moving = false;
+      move_end = w.pos;
+    }
+    if (starts_with(s, "wait round 1")) {
+      w.publish_rounds(2);
+      w.publish_result("certified", 2);
+    }
+  };
+  w.on_step = [&] {
+    if (moving)
+      for (const Vector3d& o : w.others) min_sep_during_move = std::min(min_sep_during_move, (w.pos - o).norm());
+  };
+  // Setpoints stream from the first odometry on: count over 2 s.
+  ASSERT_TRUE(w.run([&] { return w.setpoints.size() >= 1; }, std::chrono::seconds(5))) << "no setpoint";
+  const size_t n0 = w.setpoints.size();
+  w.run([] { return false; }, std::chrono::seconds(2));
+  const double rate = (w.setpoints.size() - n0) / 2.0;
+  EXPECT_GE(rate, 20.0) << "setpoints per second";
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "done"); }, std::chrono::seconds(12)))
+      << "never done; last state: " << w.state;
+  EXPECT_EQ(takeoff_end_check, 1);
+  ASSERT_FALSE(std::isnan(spin0_yaw));
+  ASSERT_FALSE(std::isnan(spin0_end_yaw));
+  EXPECT_GE(spin0_end_yaw - spin0_yaw, 2 * kPi - 0.05) << "the spin turned too little";
+  // The move: ambiguous → a deliberate move of max_move = min(1.5, (d − 1)/2 − 0.1), d = nearest drone.
+  ASSERT_FALSE(std::isnan(move_end.x())) << "no move";
+  double d = std::numeric_limits<double>::infinity();
+  for (const Vector3d& o : w.others) d = std::min(d, (o - move_start).norm());
+  const double max_move = std::min(1.5, (d - 1.0) / 2 - 0.1);
+  const double moved = (move_end - move_start).head<2>().norm();
+  EXPECT_GT(moved, 0.5 * max_move) << "the ambiguous result must move the drone";
+  EXPECT_LE(moved, max_move + 0.03);
+  EXPECT_GE(min_sep_during_move, 1.0) << "came closer than min_separation to another drone";
+  // Certified: hold — velocity 0, position constant.
+  size_t h0 = w.setpoints.size();
+  w.run([] { return false; }, std::chrono::milliseconds(1000));
+  ASSERT_GT(w.setpoints.size(), h0 + 20);
+  const fact::setpoint_t& first = w.setpoints[h0].second;
+  for (size_t i = h0; i < w.setpoints.size(); ++i) {
+    const fact::setpoint_t& s = w.setpoints[i].second;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(s.velocity[k], 0.0);
+      EXPECT_NEAR(s.position[k], first.position[k], 1e-9);
+    }
+    EXPECT_EQ(s.yaw_rate, 0.0);
+  }
+  EXPECT_NE(p.err().find("certified result (rounds_used 2"), std::string::npos);
+  // Bad input: NaN odometry, another drone's odometry, garbage bytes.
+  w.publish_odometry(NAN, 0, 1.4, 0);
+  w.publish_odometry(0, 0, 1.4, 0, 5);
+  const char garbage[16] = "not an odometry";
+  w.lcm().publish("FACT_ODOMETRY_0", garbage, sizeof garbage);
+  ASSERT_TRUE(w.run([&] { return counter(w.status, "rejected_nan") >= 1 && counter(w.status, "wrong_drone_id") >= 1 &&
+                                 counter(w.status, "undecodable") >= 1; },
+                    std::chrono::seconds(3)));
+  // Stale odometry: hover with the reason, setpoints keep streaming at rest; back → done again.
+  w.odometry_on = false;
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "hover: odometry stale"); }, std::chrono::seconds(3)))
+      << w.state;
+  const size_t s0 = w.setpoints.size();
+  w.run([] { return false; }, std::chrono::milliseconds(500));
+  EXPECT_GE(w.setpoints.size() - s0, 10u) << "setpoints must continue while hovering";
+  for (size_t i = s0; i < w.setpoints.size(); ++i) EXPECT_EQ(w.setpoints[i].second.velocity[2], 0.0);
+  w.odometry_on = true;
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "done"); }, std::chrono::seconds(3))) << w.state;
+  EXPECT_GE(counter(w.status, "hover"), 1);
+  EXPECT_GT(counter(w.status, "frames_mapped"), 0);
+  EXPECT_GT(counter(w.status, "observations"), 0);
+  EXPECT_EQ(counter(w.status, "rejected_setpoint"), 0);
+  EXPECT_EQ(p.stop(), 0);
+}
+
+// No gossip, no solver: after --wait-timeout the drone moves toward the farthest observed drone
+// (random moves off), then --max-rounds 1 ends in a hold and --exit-when-done exits 3.
+TEST_F(PlannerApp, WaitTimeoutMovesTowardFarthestObserved) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({"--wait-timeout", "0.5", "--max-rounds", "1", "--exit-when-done"});
+  Vector3d move_start = Vector3d::Constant(NAN);
+  w.on_state = [&](const std::string& s) {
+    if (starts_with(s, "move round") && std::isnan(move_start.x())) move_start = w.pos;
+  };
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "done"); }, std::chrono::seconds(10))) << w.state;
+  ASSERT_FALSE(std::isnan(move_start.x()));
+  w.run([&] { return !p.running(); }, std::chrono::seconds(3));
+  EXPECT_EQ(p.wait_for(std::chrono::seconds(1)), 3);
+  const Vector3d farthest = (w.others[0] - move_start).norm() > (w.others[1] - move_start).norm() ? w.others[0] : w.others[1];
+  const Eigen::Vector2d want = (farthest - move_start).head<2>().normalized();
+  const Eigen::Vector2d got = (w.pos - move_start).head<2>();
+  ASSERT_GT(got.norm(), 0.2);
+  EXPECT_GT(got.normalized().dot(want), 0.99) << "moved to (" << w.pos.transpose() << ")";
+  const std::string err = p.err();
+  EXPECT_NE(err.find("no result for round 0"), std::string::npos);
+  EXPECT_GE(counter(w.status, "wait_timeouts"), 1);
+  EXPECT_NE(err.find("exit: --max-rounds reached"), std::string::npos);
+}
+
+TEST_F(PlannerApp, BadFlagsExit2) {
+  {
+    Process p({FACT_PLANNER_BINARY, "--lcm-url", kUrl}, dir_ / "a.err");
+    EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
+  }
+  {
+    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--setpoint-rate", "10"}, dir_ / "b.err");
+    EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
+    EXPECT_NE(p.err().find("--setpoint-rate"), std::string::npos);
+  }
+  {
+    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--takeoff-min", "2", "--takeoff-max", "1"}, dir_ / "c.err");
+    EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool listing = false;
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
+  if (!listing && !only_loopback()) {
+    std::vector<char*> words = {const_cast<char*>(FACT_NETNS_RUN)};
+    std::string self = fs::read_symlink("/proc/self/exe").string();
+    words.push_back(self.data());
+    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+    words.push_back(nullptr);
+    execv(FACT_NETNS_RUN, words.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
+    return 125;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
