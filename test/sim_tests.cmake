@@ -19,3 +19,18 @@ if(TARGET fact-sim AND TARGET fact_app_common)
   add_dependencies(fact_sim_app_tests fact-sim)
   gtest_discover_tests(fact_sim_app_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 30)
 endif()
+
+# fact-sim's simulated flight controllers (--mavlink-port) as processes: the loop test setpoints
+# (LCM) -> fact-fc-bridge -> MAVLink over UDP 127.0.0.1 -> fact-sim's FC -> dynamics, checked on
+# ground truth (tracking error, failsafe hover); raw MAVLink commands, type_mask and rejections;
+# --fc-auto-arm; flags. Re-executes itself through scripts/netns-run.sh (LCM udpm).
+if(TARGET fact-sim AND TARGET fact-fc-bridge AND TARGET fact_mavlink)
+  add_executable(fact_sim_fc_tests test_sim_fc.cpp)
+  target_compile_definitions(fact_sim_fc_tests PRIVATE
+    FACT_SIM_BINARY="$<TARGET_FILE:fact-sim>"
+    FACT_FC_BRIDGE_BINARY="$<TARGET_FILE:fact-fc-bridge>"
+    FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
+  target_link_libraries(fact_sim_fc_tests PRIVATE fact_app_common fact_mavlink GTest::gtest)
+  add_dependencies(fact_sim_fc_tests fact-sim fact-fc-bridge)
+  gtest_discover_tests(fact_sim_fc_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 60)
+endif()

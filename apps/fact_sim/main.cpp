@@ -8,8 +8,11 @@
 //   FACT_STATUS          fact::app_status_t heartbeat and counters
 // and follows fact::setpoint_t on FACT_SETPOINT_<id> (or a --script). Every message carries the
 // simulation time in utime; it starts at --epoch-utime, so runs are reproducible.
+// With --mavlink-port BASE each drone instead has a simulated PX4 (sim_fc.h) on UDP
+// --mavlink-bind:(BASE + drone id), driven by fact-fc-bridge over MAVLink v2; LCM setpoints are
+// then not read.
 //
-// Exit codes: 0 at --duration or on SIGINT/SIGTERM; 1 LCM failure; 2 bad flags or world file.
+// Exit codes: 0 at --duration or on SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.
 #include "common/app.h"
 #include "fact/frame_t.hpp"
 #include "fact/odometry_t.hpp"
@@ -19,8 +22,10 @@
 #include "fact/sim_render.h"
 #include "fact/truth_t.hpp"
 #include "fact/world_io.h"
+#include "sim_fc.h"
 
 #include <CLI/CLI.hpp>
+#include <arpa/inet.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -63,6 +68,9 @@ struct Options {
   std::string clock_channel = "FACT_SIM_CLOCK";
   std::string status_channel = "FACT_STATUS";
   bool no_depth_noise = false;
+  int mavlink_port = 0;             // 0 = off; else drone id k's FC is on UDP mavlink_bind:(mavlink_port + k)
+  std::string mavlink_bind = "127.0.0.1";
+  bool fc_auto_arm = false;
 };
 
 struct FlagError : std::runtime_error {
@@ -92,13 +100,25 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--clock-channel", o.clock_channel, "Simulation clock channel")->capture_default_str();
   app.add_option("--status-channel", o.status_channel, "Status heartbeat channel")->capture_default_str();
   app.add_flag("--no-depth-noise", o.no_depth_noise, "Publish noise-free (quantised) depth");
+  app.add_option("--mavlink-port", o.mavlink_port,
+                 "Simulated PX4 per drone over MAVLink v2 on UDP <mavlink-bind>:(BASE + drone id); 0 = off "
+                 "(setpoints on LCM)")
+      ->type_name("BASE")->capture_default_str();
+  app.add_option("--mavlink-bind", o.mavlink_bind, "IPv4 address the simulated flight controllers bind")
+      ->type_name("ADDR")->capture_default_str();
+  app.add_flag("--fc-auto-arm", o.fc_auto_arm, "Start the simulated flight controllers armed in OFFBOARD mode");
   app.footer(
       "Without --world the built-in default world is used (room 10x10x4 m, a box, a cylinder and a\n"
       "polytope, drones at random starts). Drones hold their start pose until their first setpoint\n"
       "(fact::setpoint_t in f_i on <setpoint-channel>_<id>) or a --script: hover takes off to a seeded\n"
       "height in the world's drones.height range; spin then yaws at --spin-rate. NaN setpoints and\n"
       "setpoints for another drone are counted, logged and ignored.\n"
-      "Exit codes: 0 at --duration or SIGINT/SIGTERM; 1 LCM failure; 2 bad flags or world file.");
+      "--mavlink-port: each drone gets a simulated PX4 (sysid 1, compid 1) on UDP ADDR:(BASE + id) that\n"
+      "answers the first peer that writes to it (fact-fc-bridge --udp L:ADDR:BASE+id). It takes\n"
+      "SET_POSITION_TARGET_LOCAL_NED (LOCAL_NED), arm / DO_SET_MODE commands and ODOMETRY, sends\n"
+      "HEARTBEAT (1 Hz), LOCAL_POSITION_NED and ATTITUDE (30 Hz) in the NED of f_i; setpoints drive the\n"
+      "drone only when armed in OFFBOARD; > 0.5 s without one there: hold position (failsafe).\n"
+      "Exit codes: 0 at --duration or SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.");
 }
 
 void check_rate(const char* flag, double v, bool zero_ok) {
@@ -125,6 +145,17 @@ void check(const Options& o) {
   fact::sim::Script s;
   if (!fact::sim::parse_script(o.script, &s)) throw FlagError("--script: expected none, hover or spin, got \"" + o.script + "\"");
   parse_resolution(o.resolution);
+  if (o.mavlink_port < 0 || o.mavlink_port > 65535)
+    throw FlagError("--mavlink-port: expected 0 (off) or a port 1..65535, got " + std::to_string(o.mavlink_port));
+  if (o.mavlink_port > 0) {
+    in_addr a{};
+    if (::inet_pton(AF_INET, o.mavlink_bind.c_str(), &a) != 1)
+      throw FlagError("--mavlink-bind: expected an IPv4 address, got \"" + o.mavlink_bind + "\"");
+    if (s != fact::sim::Script::none)
+      throw FlagError("--script " + o.script + " and --mavlink-port exclude each other (the flight controllers take setpoints over MAVLink)");
+  } else if (o.fc_auto_arm) {
+    throw FlagError("--fc-auto-arm needs --mavlink-port");
+  }
   for (const std::string* c : {&o.frames_channel, &o.vio_channel, &o.setpoint_channel, &o.truth_channel,
                                &o.clock_channel, &o.status_channel})
     if (c->empty()) throw FlagError("a channel flag is empty");
@@ -156,6 +187,11 @@ fact::sim::World load_world(const Options& o) {
   }
   std::string err = fact::sim::starts_error(w);
   if (!err.empty()) throw FlagError("drone starts: " + err);
+  if (o.mavlink_port > 0)
+    for (const auto& s : w.starts)
+      if (s.id < 0 || o.mavlink_port + s.id > 65535)
+        throw FlagError("--mavlink-port " + std::to_string(o.mavlink_port) + ": drone " + std::to_string(s.id) +
+                        " would need UDP port " + std::to_string(o.mavlink_port + s.id) + " (> 65535)");
   return w;
 }
 
@@ -178,6 +214,8 @@ struct Drone {
   bool external = false;        // a setpoint arrived on LCM: the script no longer drives it
   bool takeoff_logged = false;
   int64_t frame_seq = 0, odom_seq = 0;
+  std::unique_ptr<fact::sim_fc::SimFc> fc;      // with --mavlink-port: its simulated PX4
+  std::unique_ptr<fact::sim_fc::FcPort> fc_port;
 };
 
 class Simulator {
@@ -200,8 +238,29 @@ class Simulator {
         d.sim.landed = false;
         d.sim.have_setpoint = true;
       }
-      drones_.push_back(d);
+      drones_.push_back(std::move(d));
     }
+  }
+
+  // With --mavlink-port: a simulated flight controller per drone on UDP bind:(BASE + id).
+  // Throws fact::sim_fc::SocketError when a socket cannot be bound.
+  void open_flight_controllers() {
+    fact::sim_fc::FcOptions fo;
+    fo.auto_arm = o_.fc_auto_arm;
+    for (const char* c : {"fc_setpoints", "fc_rejected_nan", "fc_rejected_frame", "fc_rejected_type_mask",
+                          "fc_rejected_range", "fc_not_for_us", "fc_commands", "fc_command_denied", "fc_odometry",
+                          "fc_peer_heartbeats", "fc_failsafe", "fc_heartbeats_sent", "fc_telemetry_sent",
+                          "fc_mavlink_bad_crc", "fc_mavlink_bad_length", "fc_mavlink_unknown_id",
+                          "fc_mavlink_signed_frame", "fc_mavlink_unknown_flags", "fc_foreign_peer", "fc_send_failed"})
+      status_->count(c, 0);
+    std::string ports;
+    for (Drone& d : drones_) {
+      d.fc = std::make_unique<fact::sim_fc::SimFc>(d.sim.id, fo, status_, log_);
+      d.fc_port = std::make_unique<fact::sim_fc::FcPort>(o_.mavlink_bind, o_.mavlink_port + d.sim.id);
+      ports += " " + std::to_string(d.sim.id) + "@" + d.fc_port->describe();
+    }
+    log_->event("simulated flight controllers (MAVLink v2, sysid 1 compid 1, " +
+                std::string(o_.fc_auto_arm ? "armed in OFFBOARD" : "disarmed in POSCTL") + " at start):" + ports);
   }
 
   static fact::sim::RenderOptions render_options(const Options& o) {
@@ -259,11 +318,13 @@ class Simulator {
     status_->set_state("running");
     publish_outputs(t, &n_cam, &n_odom, &n_truth);
     while (!fact::app::stop_requested() && (end < 0 || t < end)) {
+      if (!service_flight_controllers(t)) return 1;
       for (int64_t s = 0; s < kBatchUs; s += kPhysicsStepUs) {
         step(t);
         t += kPhysicsStepUs;
       }
       publish_outputs(t, &n_cam, &n_odom, &n_truth);
+      send_telemetry(t);
       if (t * 1e-6 >= next_progress) {
         progress(t);
         next_progress += kProgressEveryS;
@@ -284,9 +345,35 @@ class Simulator {
     if (n <= 10 || n % 100 == 0) log_->event(line + " (" + counter + " " + std::to_string(n) + ")");
   }
 
+  // Reads every pending MAVLink datagram of every flight controller (non-blocking), at sim time t.
+  // False when a socket failed.
+  bool service_flight_controllers(int64_t t) {
+    for (Drone& d : drones_) {
+      if (!d.fc_port) continue;
+      std::string error;
+      const bool ok = d.fc_port->drain(
+          [&](const uint8_t* data, std::size_t n) { d.fc->on_bytes(data, n, d.sim, t); }, status_, *log_, d.sim.id, &error);
+      if (!ok) {
+        log_->event("error: " + error);
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // The flight controllers' HEARTBEAT / LOCAL_POSITION_NED / ATTITUDE due at sim time t, to
+  // their peers (nothing before a peer has written).
+  void send_telemetry(int64_t t) {
+    for (Drone& d : drones_) {
+      if (!d.fc_port || !d.fc_port->has_peer()) continue;
+      d.fc->telemetry(d.sim, t, [&](const std::vector<uint8_t>& b) { d.fc_port->send(b, status_, *log_); });
+    }
+  }
+
   void step(int64_t t) {
     const double ts = t * 1e-6;
     for (Drone& d : drones_) {
+      if (d.fc) d.fc->control(&d.sim, t);
       if (!d.external && script_ != fact::sim::Script::none) {
         d.sim.setpoint = fact::sim::script_setpoint(script_, &d.script, fact::sim::vio_sample(d.sim), ts, o_.spin_rate);
         if (d.script.airborne && !d.takeoff_logged) {
@@ -399,7 +486,8 @@ class Simulator {
     const double ms = renders_ > 0 ? 1e3 * render_s_ / static_cast<double>(renders_) : 0.0;
     log_->event(fmt("sim t = %.1f s: ", t * 1e-6) + std::to_string(status_->value("frames")) + " frames (" +
                 fmt("%.2f ms/render", ms) + "), " + std::to_string(status_->value("odometry")) + " odometry, " +
-                std::to_string(status_->value("setpoints")) + " setpoints");
+                std::to_string(status_->value("setpoints")) + " setpoints" +
+                (o_.mavlink_port > 0 ? ", " + std::to_string(status_->value("fc_setpoints")) + " MAVLink setpoints" : ""));
   }
 
   // Handles pending LCM messages; with --rate > 0 also waits until the wall clock catches up
@@ -413,6 +501,7 @@ class Simulator {
         wait_ms = static_cast<int>(std::max<int64_t>(0, (left.count() + 999) / 1000));
       }
       const int r = lcm_->handleTimeout(wait_ms);
+      if (r < 0 && fact::app::stop_requested()) return true;  // SIGINT / SIGTERM interrupted the wait
       if (r < 0) {
         log_->event("error: LCM failed while handling messages");
         return false;
@@ -483,6 +572,15 @@ int main(int argc, char** argv) {
             ", " + o.resolution + ", script " + o.script + ", epoch " + std::to_string(o.epoch_utime) + " us");
   log.event(world_summary(world, o));
   Simulator sim(o, world, &lcm, &status, &log);
-  sim.subscribe();
+  if (o.mavlink_port > 0) {
+    try {
+      sim.open_flight_controllers();
+    } catch (const fact::sim_fc::SocketError& e) {
+      log.event(std::string("error: ") + e.what());
+      return 1;
+    }
+  } else {
+    sim.subscribe();
+  }
   return sim.run();
 }
