@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <poll.h>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -253,6 +254,32 @@ int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> ever
       return 1;
     }
     if (every) every(now_us());
+  }
+  return 0;
+}
+
+int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every) {
+  if (!lcm.good()) {
+    std::cerr << "LCM is not usable (bad --lcm-url, or no network for udpm)\n";
+    return 1;
+  }
+  pollfd fd{lcm.getFileno(), POLLIN, 0};
+  int64_t deadline = every(now_us());
+  while (!stop_requested()) {
+    int64_t wait = std::clamp<int64_t>(deadline - now_us(), 0, max_wait_us);
+    if (following_sim_clock()) wait = std::min<int64_t>(wait, 1000);
+    const timespec ts{static_cast<time_t>(wait / 1000000), static_cast<long>((wait % 1000000) * 1000)};
+    const int r = ppoll(&fd, 1, &ts, nullptr);
+    if (r < 0 && errno != EINTR) {
+      std::cerr << "poll on the LCM socket failed\n";
+      return 1;
+    }
+    if (r > 0 && lcm.handle() < 0) {
+      if (stop_requested()) break;
+      std::cerr << "LCM handle failed\n";
+      return 1;
+    }
+    deadline = every(now_us());
   }
   return 0;
 }

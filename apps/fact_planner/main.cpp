@@ -330,6 +330,9 @@ class Planner {
     return -1;
   }
 
+  // When the next setpoint is due (µs, now_us() clock): the main loop wakes for it.
+  int64_t next_deadline() const { return next_setpoint_; }
+
   void final_status() {
     status_.set_state("stopped");
     status_.publish(fact::app::now_us());
@@ -659,12 +662,14 @@ int main(int argc, char** argv) {
   lcm.subscribe(options.result_channel, &Planner::on_result, &planner);
   log.event("publishing setpoints on " + options.setpoint_channel + " at " + std::to_string(options.setpoint_rate) + " Hz");
   int exit_code = -1;
-  const int code = fact::app::run_loop(lcm, 2, [&](int64_t now) {
+  // Wakes for every message and exactly when the next setpoint is due (at least every 20 ms).
+  const int code = fact::app::run_deadline_loop(lcm, 20000, [&](int64_t now) {
     const int c = planner.every(now);
     if (c >= 0 && exit_code < 0) {
       exit_code = c;
       fact::app::request_stop();
     }
+    return planner.next_deadline();
   });
   planner.final_status();
   log.event(code != 0 ? "stopped: LCM failed" : "stopped");
