@@ -239,46 +239,70 @@ bool counts_fit(const fact::truth_t*, const void* data, int size) {
 
 }  // namespace detail
 
-int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every) {
-  if (!lcm.good()) {
-    std::cerr << "LCM is not usable (bad --lcm-url, or no network for udpm)\n";
+namespace {
+
+// The LCM instances a loop serves, checked usable; empty (after logging) when one is not.
+std::vector<lcm::LCM*> loop_instances(lcm::LCM& lcm, const std::vector<lcm::LCM*>& more) {
+  std::vector<lcm::LCM*> all{&lcm};
+  for (lcm::LCM* m : more)
+    if (m) all.push_back(m);
+  for (lcm::LCM* m : all)
+    if (!m->good()) {
+      std::cerr << "LCM is not usable (bad --lcm-url, or no network for udpm)\n";
+      return {};
+    }
+  return all;
+}
+
+// Waits up to wait_us for any instance's socket, then handles one message on each readable one.
+// 0 when fine (message or timeout), 1 when polling or LCM failed (logged), 2 when stopped.
+int wait_and_handle(const std::vector<lcm::LCM*>& all, int64_t wait_us) {
+  std::vector<pollfd> fds;
+  for (lcm::LCM* m : all) fds.push_back(pollfd{m->getFileno(), POLLIN, 0});
+  const timespec ts{static_cast<time_t>(wait_us / 1000000), static_cast<long>((wait_us % 1000000) * 1000)};
+  const int r = ppoll(fds.data(), fds.size(), &ts, nullptr);
+  if (r < 0 && errno != EINTR) {
+    std::cerr << "poll on the LCM sockets failed\n";
     return 1;
   }
-  if (period_ms < 1) period_ms = 1;
-  while (!stop_requested()) {
-    int r = lcm.handleTimeout(period_ms);
-    if (r < 0) {
-      if (stop_requested()) break;  // interrupted by the stop signal
-      if (errno == EINTR) continue;  // another signal (e.g. SIGCHLD): not an LCM failure
-      std::cerr << "LCM handleTimeout failed\n";
+  for (size_t i = 0; r > 0 && i < fds.size(); ++i) {
+    if (!(fds[i].revents & POLLIN)) continue;
+    if (all[i]->handle() < 0) {
+      if (stop_requested()) return 2;
+      std::cerr << "LCM handle failed\n";
       return 1;
     }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every,
+             const std::vector<lcm::LCM*>& more) {
+  const std::vector<lcm::LCM*> all = loop_instances(lcm, more);
+  if (all.empty()) return 1;
+  const int64_t period_us = std::max(1, period_ms) * int64_t{1000};
+  while (!stop_requested()) {
+    const int r = wait_and_handle(all, period_us);
+    if (r == 1) return 1;
+    if (r == 2) break;
     if (every) every(now_us());
   }
   return 0;
 }
 
-int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every) {
-  if (!lcm.good()) {
-    std::cerr << "LCM is not usable (bad --lcm-url, or no network for udpm)\n";
-    return 1;
-  }
-  pollfd fd{lcm.getFileno(), POLLIN, 0};
+int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every,
+                      const std::vector<lcm::LCM*>& more) {
+  const std::vector<lcm::LCM*> all = loop_instances(lcm, more);
+  if (all.empty()) return 1;
   int64_t deadline = every(now_us());
   while (!stop_requested()) {
     int64_t wait = std::clamp<int64_t>(deadline - now_us(), 0, max_wait_us);
     if (following_sim_clock()) wait = std::min<int64_t>(wait, 1000);
-    const timespec ts{static_cast<time_t>(wait / 1000000), static_cast<long>((wait % 1000000) * 1000)};
-    const int r = ppoll(&fd, 1, &ts, nullptr);
-    if (r < 0 && errno != EINTR) {
-      std::cerr << "poll on the LCM socket failed\n";
-      return 1;
-    }
-    if (r > 0 && lcm.handle() < 0) {
-      if (stop_requested()) break;
-      std::cerr << "LCM handle failed\n";
-      return 1;
-    }
+    const int r = wait_and_handle(all, wait);
+    if (r == 1) return 1;
+    if (r == 2) break;
     deadline = every(now_us());
   }
   return 0;

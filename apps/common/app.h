@@ -160,15 +160,19 @@ bool decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, T* msg, 
   return false;
 }
 
-// Loops on lcm.handleTimeout(period_ms) until stop_requested(), calling every(now_us()) after each
-// wait (message or timeout). Returns 0, or 1 (after logging to stderr) if LCM fails.
-int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every);
+// Loops until stop_requested(): waits up to period_ms for a message on lcm or on any of `more`
+// (other LCM instances, e.g. a separate frames URL), handles what arrived, then calls
+// every(now_us()). Returns 0, or 1 (after logging to stderr) if LCM fails.
+int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every,
+             const std::vector<lcm::LCM*>& more = {});
 
 // Like run_loop, for apps with a schedule (e.g. a setpoint stream): every(now) returns the time
 // (µs, the now_us() clock) of its next deadline, and the loop waits on the LCM socket until that
 // deadline (at most max_wait_us) with microsecond resolution, handling messages as they come, so
 // a deadline is met as closely as the scheduler allows rather than on a polling grid. Under the
 // simulation clock the wait is also capped at 1 ms of wall time (simulated time moves by ticks).
-int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every);
+// `more` as in run_loop.
+int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every,
+                      const std::vector<lcm::LCM*>& more = {});
 
 }  // namespace fact::app

@@ -46,6 +46,7 @@ constexpr const char* kApp = "fact-detector";
 struct Options {
   fact::app::CommonFlags common;
   std::string frames_channel;     // "" = FACT_FRAMES_<id>
+  std::string frames_url;         // "" = frames come on --lcm-url
   std::string odometry_channel;   // "" = FACT_ODOMETRY_<id>
   std::string output_channel;     // "" = FACT_DETECTIONS_<id>
   std::string png_dir;            // read frames from here instead of LCM
@@ -63,6 +64,10 @@ struct Options {
 void add_flags(CLI::App& app, Options& o) {
   fact::app::add_common_flags(app, &o.common, fact::app::DroneIdFlag::optional);
   app.add_option("--frames-channel", o.frames_channel, "Input frames (default FACT_FRAMES_<id>)")->type_name("CHANNEL");
+  app.add_option("--frames-url", o.frames_url,
+                 "LCM URL the frames come on, if not --lcm-url (e.g. a per-drone camera group with a large "
+                 "recv_buf_size, so the other apps never receive frames)")
+      ->type_name("URL");
   app.add_option("--odometry-channel", o.odometry_channel, "Odometry for the attitude (default FACT_ODOMETRY_<id>)")
       ->type_name("CHANNEL");
   app.add_option("--output-channel", o.output_channel, "Detections out (default FACT_DETECTIONS_<id>)")
@@ -564,13 +569,22 @@ int main(int argc, char** argv) {
   App app(&lcm, options, std::move(yolo));
   if (!options.png_dir.empty()) return run_png_dir(app, options);
   if (!fact::app::start_clock(lcm, options.common, log)) return 1;
-  lcm.subscribe(options.frames_channel, &App::on_frame, &app)->setQueueCapacity(8);
+  std::unique_ptr<lcm::LCM> frames_lcm;  // only with --frames-url
+  if (!options.frames_url.empty()) {
+    frames_lcm = std::make_unique<lcm::LCM>(options.frames_url);
+    if (!frames_lcm->good()) {
+      log.event("error: cannot open LCM for frames at --frames-url " + options.frames_url);
+      return 1;
+    }
+  }
+  (frames_lcm ? *frames_lcm : lcm).subscribe(options.frames_channel, &App::on_frame, &app)->setQueueCapacity(8);
   lcm.subscribe(options.odometry_channel, &App::on_odometry, &app)->setQueueCapacity(1000);
-  log.event("backend " + options.backend + ", frames on " + options.frames_channel + ", odometry on " +
+  log.event("backend " + options.backend + ", frames on " + options.frames_channel +
+            (frames_lcm ? " at " + options.frames_url : std::string()) + ", odometry on " +
             options.odometry_channel + ", publishing on " + options.output_channel);
   app.status().set_state("waiting for frames on " + options.frames_channel);
   app.status().publish(fact::app::now_us());
-  const int code = fact::app::run_loop(lcm, 10, [&](int64_t) { app.flush(false); });
+  const int code = fact::app::run_loop(lcm, 10, [&](int64_t) { app.flush(false); }, {frames_lcm.get()});
   app.flush(true);
   log.event(std::string(code == 0 ? "stopped: " : "stopped (LCM failed): ") + app.summary());
   app.status().set_state(code == 0 ? "stopped" : "LCM failed");

@@ -49,6 +49,7 @@ struct Options {
   fact::app::CommonFlags common;
   std::string odometry_channel, detections_channel, frames_channel, rounds_channel, result_channel,
       setpoint_channel;  // "" = FACT_<NAME>_<id>
+  std::string frames_url;            // "" = frames come on --lcm-url
   uint64_t seed = 1;                 // planner random generator (takeoff height, random moves)
   double setpoint_rate = 30;         // Hz, >= 20
   double odometry_timeout = 0.5;     // s, older odometry (by arrival) → hover
@@ -70,6 +71,8 @@ void add_flags(CLI::App& app, Options& o) {
   channel("--odometry-channel", o.odometry_channel, "Own odometry in (default FACT_ODOMETRY_<id>)");
   channel("--detections-channel", o.detections_channel, "Own detections in (default FACT_DETECTIONS_<id>)");
   channel("--frames-channel", o.frames_channel, "Own gray + depth frames in, for the map (default FACT_FRAMES_<id>)");
+  app.add_option("--frames-url", o.frames_url, "LCM URL the frames come on, if not --lcm-url (as fact-detector's)")
+      ->type_name("URL");
   channel("--rounds-channel", o.rounds_channel, "Complete rounds from fact-gossip (default FACT_SWARM_ROUNDS_<id>)");
   channel("--result-channel", o.result_channel, "Result from fact-solver (default FACT_RESULT_<id>)");
   channel("--setpoint-channel", o.setpoint_channel, "Setpoints out (default FACT_SETPOINT_<id>)");
@@ -657,7 +660,15 @@ int main(int argc, char** argv) {
   Planner planner(lcm, options);
   lcm.subscribe(options.odometry_channel, &Planner::on_odometry, &planner);
   lcm.subscribe(options.detections_channel, &Planner::on_detections, &planner);
-  lcm.subscribe(options.frames_channel, &Planner::on_frame, &planner);
+  std::unique_ptr<lcm::LCM> frames_lcm;  // only with --frames-url
+  if (!options.frames_url.empty()) {
+    frames_lcm = std::make_unique<lcm::LCM>(options.frames_url);
+    if (!frames_lcm->good()) {
+      log.event("error: cannot open LCM for frames at --frames-url " + options.frames_url);
+      return 1;
+    }
+  }
+  (frames_lcm ? *frames_lcm : lcm).subscribe(options.frames_channel, &Planner::on_frame, &planner);
   lcm.subscribe(options.rounds_channel, &Planner::on_rounds, &planner);
   lcm.subscribe(options.result_channel, &Planner::on_result, &planner);
   log.event("publishing setpoints on " + options.setpoint_channel + " at " + std::to_string(options.setpoint_rate) + " Hz");
@@ -670,7 +681,7 @@ int main(int argc, char** argv) {
       fact::app::request_stop();
     }
     return planner.next_deadline();
-  });
+  }, {frames_lcm.get()});
   planner.final_status();
   log.event(code != 0 ? "stopped: LCM failed" : "stopped");
   return code != 0 ? 1 : exit_code >= 0 ? exit_code : 0;

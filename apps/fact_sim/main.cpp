@@ -33,6 +33,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <random>
 #include <stdexcept>
@@ -71,6 +72,11 @@ struct Options {
   int mavlink_port = 0;             // 0 = off; else drone id k's FC is on UDP mavlink_bind:(mavlink_port + k)
   std::string mavlink_bind = "127.0.0.1";
   bool fc_auto_arm = false;
+  std::string frames_url;           // "" = frames on lcm_url; else a URL template, "{id}" = the drone id
+  bool lockstep = false;            // wait for every detector's answer to a frame before the next frame
+  double lockstep_timeout = 2.0;    // s of wall time a frame waits for a detector before going on without it
+  std::string detections_channel = "FACT_DETECTIONS";
+  bool print_ids = false;           // print the drones' ids (world + --drones) and exit
 };
 
 struct FlagError : std::runtime_error {
@@ -107,6 +113,22 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--mavlink-bind", o.mavlink_bind, "IPv4 address the simulated flight controllers bind")
       ->type_name("ADDR")->capture_default_str();
   app.add_flag("--fc-auto-arm", o.fc_auto_arm, "Start the simulated flight controllers armed in OFFBOARD mode");
+  app.add_option("--frames-url", o.frames_url,
+                 "LCM URL template for each drone's frames, \"{id}\" replaced by the drone id (e.g. "
+                 "udpm://239.255.77.{id}:7667?ttl=1): a camera group per drone that only its detector and "
+                 "planner join. Default: frames go on --lcm-url")
+      ->type_name("URL");
+  app.add_flag("--lockstep", o.lockstep,
+               "Before each frame, wait until every drone's detector has answered the previous one "
+               "(fact::detections_t with that frame's utime on <detections-channel>_<id>), so a fast run "
+               "never outruns the detectors");
+  app.add_option("--lockstep-timeout", o.lockstep_timeout,
+                 "s of wall time a frame waits for a detector; after that the drone is not waited for "
+                 "until its detector catches up")
+      ->capture_default_str();
+  app.add_flag("--print-ids", o.print_ids, "Print the drones' ids (from the world and --drones), space separated, and exit");
+  app.add_option("--detections-channel", o.detections_channel, "Detections channel base (+ _<id>), for --lockstep")
+      ->capture_default_str();
   app.footer(
       "Without --world the built-in default world is used (room 10x10x4 m, a box, a cylinder and a\n"
       "polytope, drones at random starts). Drones hold their start pose until their first setpoint\n"
@@ -140,6 +162,7 @@ void check(const Options& o) {
   check_rate("--odometry-rate", o.odometry_rate, false);
   check_rate("--truth-rate", o.truth_rate, false);
   check_rate("--spin-rate", o.spin_rate, false);
+  check_rate("--lockstep-timeout", o.lockstep_timeout, false);
   if (o.spin_rate > 1.5) throw FlagError("--spin-rate: at most the yaw-rate limit 1.5 rad/s, got " + std::to_string(o.spin_rate));
   if (o.drones < 0 || o.drones > 64) throw FlagError("--drones: expected 1 ... 64, got " + std::to_string(o.drones));
   fact::sim::Script s;
@@ -216,6 +239,9 @@ struct Drone {
   int64_t frame_seq = 0, odom_seq = 0;
   std::unique_ptr<fact::sim_fc::SimFc> fc;      // with --mavlink-port: its simulated PX4
   std::unique_ptr<fact::sim_fc::FcPort> fc_port;
+  lcm::LCM* frames_lcm = nullptr;   // where its frames go (--frames-url), else the main LCM
+  int64_t answered_utime = -1;      // --lockstep: newest frame utime its detector answered
+  bool waited_out = false;          // --lockstep: timed out; not waited for until it catches up
 };
 
 class Simulator {
@@ -261,6 +287,45 @@ class Simulator {
     }
     log_->event("simulated flight controllers (MAVLink v2, sysid 1 compid 1, " +
                 std::string(o_.fc_auto_arm ? "armed in OFFBOARD" : "disarmed in POSCTL") + " at start):" + ports);
+  }
+
+  // Opens each drone's frames LCM (--frames-url, "{id}" replaced by its id; drones sharing a URL
+  // share an instance). "" when fine, else the URL that failed.
+  std::string open_frame_urls() {
+    for (Drone& d : drones_) {
+      d.frames_lcm = lcm_;
+      if (o_.frames_url.empty()) continue;
+      const std::string url = frames_url_for(o_.frames_url, d.sim.id);
+      auto& slot = frame_lcms_[url];
+      if (!slot) slot = std::make_unique<lcm::LCM>(url);
+      if (!slot->good()) return url;
+      d.frames_lcm = slot.get();
+    }
+    return "";
+  }
+
+  static std::string frames_url_for(std::string url, int id) {
+    for (size_t at = url.find("{id}"); at != std::string::npos; at = url.find("{id}", at))
+      url.replace(at, 4, std::to_string(id));
+    return url;
+  }
+
+  // --lockstep: every drone's detections tell which frame its detector has answered.
+  void subscribe_detections() {
+    for (size_t i = 0; i < drones_.size(); ++i) {
+      const std::string ch = fact::app::channel(o_.detections_channel, drones_[i].sim.id);
+      lcm_->subscribe(ch, &Simulator::on_detections_raw, this)->setQueueCapacity(100);
+      detections_index_.push_back(ch);
+    }
+  }
+
+  void on_detections_raw(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    fact::detections_t m;
+    if (!fact::app::decode(rbuf, channel, &m, status_, *log_)) return;
+    auto it = std::find(detections_index_.begin(), detections_index_.end(), channel);
+    if (it == detections_index_.end()) return;
+    Drone& d = drones_[static_cast<size_t>(it - detections_index_.begin())];
+    d.answered_utime = std::max(d.answered_utime, m.utime);
   }
 
   static fact::sim::RenderOptions render_options(const Options& o) {
@@ -310,26 +375,26 @@ class Simulator {
 
   // Runs until --duration or a stop request. Returns the exit code.
   int run() {
-    const auto wall0 = std::chrono::steady_clock::now();
+    auto wall0 = std::chrono::steady_clock::now();
     int64_t t = 0;  // sim time since the epoch (µs)
     const int64_t end = o_.duration > 0 ? static_cast<int64_t>(std::llround(o_.duration * 1e6)) : -1;
     int64_t n_cam = 0, n_odom = 0, n_truth = 0;
     double next_progress = kProgressEveryS;
     status_->set_state("running");
-    publish_outputs(t, &n_cam, &n_odom, &n_truth);
+    if (!publish_outputs(t, &n_cam, &n_odom, &n_truth)) return 1;
     while (!fact::app::stop_requested() && (end < 0 || t < end)) {
       if (!service_flight_controllers(t)) return 1;
       for (int64_t s = 0; s < kBatchUs; s += kPhysicsStepUs) {
         step(t);
         t += kPhysicsStepUs;
       }
-      publish_outputs(t, &n_cam, &n_odom, &n_truth);
+      if (!publish_outputs(t, &n_cam, &n_odom, &n_truth)) return 1;
       send_telemetry(t);
       if (t * 1e-6 >= next_progress) {
         progress(t);
         next_progress += kProgressEveryS;
       }
-      if (!handle_messages(wall0, t)) return 1;
+      if (!handle_messages(&wall0, t)) return 1;
     }
     progress(t);
     status_->set_state("stopped");
@@ -386,16 +451,18 @@ class Simulator {
   }
 
   // Publishes whatever is due at sim time t: clock always, odometry, frames, truth, status.
-  void publish_outputs(int64_t t, int64_t* n_cam, int64_t* n_odom, int64_t* n_truth) {
+  // False if LCM failed (while waiting for the detectors).
+  bool publish_outputs(int64_t t, int64_t* n_cam, int64_t* n_odom, int64_t* n_truth) {
     const int64_t utime = o_.epoch_utime + t;
     fact::sim_clock_t clock;
     clock.utime = utime;
     clock.rate = o_.rate;
     lcm_->publish(o_.clock_channel, &clock);
     if (due(t, o_.odometry_rate, n_odom)) publish_odometry(utime);
-    if (due(t, o_.camera_rate, n_cam)) publish_frames(utime);
+    if (due(t, o_.camera_rate, n_cam) && !publish_frames(utime)) return false;
     if (due(t, o_.truth_rate, n_truth)) publish_truth(utime);
     status_->tick(utime);
+    return true;
   }
 
   // Whether the k-th sample of a `rate` Hz stream (at round(k·1e6/rate) µs) is due at t.
@@ -438,7 +505,39 @@ class Simulator {
     }
   }
 
-  void publish_frames(int64_t utime) {
+  // --lockstep: handles messages until every drone's detector has answered the frame of
+  // `frame_utime` (or --lockstep-timeout passes: those drones are then skipped until they catch up).
+  // False if LCM failed.
+  bool wait_for_detectors(int64_t frame_utime) {
+    auto pending = [&](const Drone& d) { return !d.waited_out && d.answered_utime < frame_utime; };
+    const auto limit = std::chrono::steady_clock::now() + std::chrono::duration<double>(o_.lockstep_timeout);
+    for (Drone& d : drones_)
+      if (d.waited_out && d.answered_utime >= frame_utime) {
+        d.waited_out = false;
+        log_->event("lockstep: drone " + std::to_string(d.sim.id) + "'s detector caught up; waiting for it again");
+      }
+    while (std::any_of(drones_.begin(), drones_.end(), pending) && !fact::app::stop_requested()) {
+      if (std::chrono::steady_clock::now() >= limit) {
+        for (Drone& d : drones_)
+          if (pending(d)) {
+            d.waited_out = true;
+            reject("lockstep_timeouts", "lockstep: drone " + std::to_string(d.sim.id) + "'s detector has not answered the frame at " +
+                                            std::to_string(frame_utime) + " us within " + fmt("%g s", o_.lockstep_timeout) +
+                                            "; going on without waiting for it");
+          }
+        break;
+      }
+      if (lcm_->handleTimeout(10) < 0 && !fact::app::stop_requested()) {
+        log_->event("error: LCM failed while waiting for the detectors");
+        return false;
+      }
+    }
+    return true;
+  }
+
+  bool publish_frames(int64_t utime) {
+    if (o_.lockstep && last_frame_utime_ >= 0 && !wait_for_detectors(last_frame_utime_)) return false;
+    last_frame_utime_ = utime;
     const std::vector<fact::sim::DronePose> p = poses();
     const fact::CameraIntrinsics& k = renderer_.intrinsics();
     for (size_t i = 0; i < drones_.size(); ++i) {
@@ -462,9 +561,10 @@ class Simulator {
       m.depth_mm.resize(frame_.depth_mm.size());
       for (size_t j = 0; j < frame_.depth_mm.size(); ++j)
         m.depth_mm[j] = static_cast<int16_t>(std::min<uint16_t>(frame_.depth_mm[j], 32767));
-      lcm_->publish(fact::app::channel(o_.frames_channel, m.drone_id), &m);
+      drones_[i].frames_lcm->publish(fact::app::channel(o_.frames_channel, m.drone_id), &m);
       status_->count("frames");
     }
+    return true;
   }
 
   void publish_truth(int64_t utime) {
@@ -491,12 +591,18 @@ class Simulator {
   }
 
   // Handles pending LCM messages; with --rate > 0 also waits until the wall clock catches up
-  // with sim time t. False if LCM failed.
-  bool handle_messages(std::chrono::steady_clock::time_point wall0, int64_t t) {
+  // with sim time t. --rate is a cap: a sim that fell behind (slow rendering, --lockstep waits)
+  // moves wall0 on instead of bursting to catch up. False if LCM failed.
+  bool handle_messages(std::chrono::steady_clock::time_point* wall0, int64_t t) {
+    if (o_.rate > 0) {
+      const auto target = *wall0 + std::chrono::microseconds(static_cast<int64_t>(t / o_.rate));
+      const auto behind = std::chrono::steady_clock::now() - target;
+      if (behind > std::chrono::milliseconds(50)) *wall0 += behind;
+    }
     for (;;) {
       int wait_ms = 0;
       if (o_.rate > 0) {
-        const auto target = wall0 + std::chrono::microseconds(static_cast<int64_t>(t / o_.rate));
+        const auto target = *wall0 + std::chrono::microseconds(static_cast<int64_t>(t / o_.rate));
         const auto left = std::chrono::duration_cast<std::chrono::microseconds>(target - std::chrono::steady_clock::now());
         wait_ms = static_cast<int>(std::max<int64_t>(0, (left.count() + 999) / 1000));
       }
@@ -525,6 +631,9 @@ class Simulator {
   fact::sim::DynamicsLimits limits_;
   std::vector<Drone> drones_;
   std::vector<std::string> channel_index_;
+  std::vector<std::string> detections_index_;
+  std::map<std::string, std::unique_ptr<lcm::LCM>> frame_lcms_;  // --frames-url instances by URL
+  int64_t last_frame_utime_ = -1;
   double render_s_ = 0;
   int64_t renders_ = 0;
 };
@@ -561,6 +670,11 @@ int main(int argc, char** argv) {
     log.event(std::string("error: bad world file: ") + e.what());
     return 2;
   }
+  if (o.print_ids) {
+    for (size_t i = 0; i < world.starts.size(); ++i) std::cout << (i ? " " : "") << world.starts[i].id;
+    std::cout << "\n";
+    return 0;
+  }
   fact::app::install_stop_handler();
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
@@ -581,6 +695,15 @@ int main(int argc, char** argv) {
     }
   } else {
     sim.subscribe();
+  }
+  if (const std::string bad = sim.open_frame_urls(); !bad.empty()) {
+    log.event("error: cannot open LCM for frames at " + bad + " (--frames-url " + o.frames_url + ")");
+    return 1;
+  }
+  if (o.lockstep) {
+    sim.subscribe_detections();
+    log.event("lockstep: each frame waits up to " + fmt("%g s", o.lockstep_timeout) + " for every drone's " +
+              o.detections_channel + "_<id> answer to the previous frame");
   }
   return sim.run();
 }
