@@ -13,6 +13,7 @@ endif()
 if(TARGET fact-sim AND TARGET fact_app_common)
   add_executable(fact_sim_app_tests test_sim_app.cpp)
   target_compile_definitions(fact_sim_app_tests PRIVATE
+    FACT_WORLDS_DIR="${PROJECT_SOURCE_DIR}/apps/fact_sim/worlds"
     FACT_SIM_BINARY="$<TARGET_FILE:fact-sim>"
     FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
   target_link_libraries(fact_sim_app_tests PRIVATE fact_app_common GTest::gtest)

@@ -7,6 +7,7 @@
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, and
 // the URLs have ttl=0. Paths come from FACT_SIM_BINARY, FACT_NETNS_RUN.
 #include "common/app.h"
+#include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "fact/setpoint_t.hpp"
@@ -337,6 +338,95 @@ TEST_F(SimApp, SameSeedSameBytes) {
         ASSERT_EQ(x.yaw, y.yaw);
       }
   EXPECT_NE(oa.back().position[2], oc.back().position[2]);  // another seed: another height, drift
+}
+
+// --frames-url: each drone's frames go to its own URL ("{id}" replaced), none to --lcm-url; the
+// frames do not depend on --render-threads.
+TEST_F(SimApp, FramesOnPerDroneUrlsAndRenderThreadsDoNotChangeThem) {
+  auto run = [](int port, const std::string& threads) {
+    auto main_bus = std::make_unique<Listener>(listen_url(port));
+    std::vector<std::unique_ptr<Listener>> cams;
+    for (int id = 0; id < 2; ++id)
+      cams.push_back(std::make_unique<Listener>("udpm://239.255.77." + std::to_string(id) + ":" +
+                                                std::to_string(port + 1 + id) + "?ttl=0&recv_buf_size=4194304"));
+    SimProcess sim({"--duration", "0.5", "--rate", "0", "--drones", "2", "--script", "spin", "--seed", "4",
+                    "--render-threads", threads, "--lcm-url", url(port), "--frames-url",
+                    "udpm://239.255.77.{id}:{" + std::to_string(port + 1) + "+id}?ttl=0"});
+    EXPECT_TRUE(main_bus->pump_until([&] { return main_bus->stopped(); })) << sim.err();
+    for (auto& c : cams) c->pump_until([] { return false; }, 0.2);
+    EXPECT_EQ(sim.wait(), 0) << sim.err();
+    EXPECT_TRUE(main_bus->frames.empty()) << "frames leaked onto --lcm-url";
+    EXPECT_FALSE(main_bus->odometry.empty());
+    for (int id = 0; id < 2; ++id) {
+      const std::string own = "FACT_FRAMES_" + std::to_string(id), other = "FACT_FRAMES_" + std::to_string(1 - id);
+      EXPECT_GE(cams[static_cast<size_t>(id)]->frames[own].size(), 4u) << own;
+      EXPECT_TRUE(cams[static_cast<size_t>(id)]->frames[other].empty()) << other << " reached drone " << id << "'s URL";
+    }
+    return cams;
+  };
+  auto one = run(7810, "1"), two = run(7820, "2");
+  int compared = 0;
+  for (const auto& fa : one[1]->frames["FACT_FRAMES_1"])
+    for (const auto& fb : two[1]->frames["FACT_FRAMES_1"])
+      if (fa.seq == fb.seq) {
+        EXPECT_EQ(fa.depth_mm, fb.depth_mm);
+        EXPECT_EQ(fa.gray, fb.gray);
+        ++compared;
+      }
+  EXPECT_GE(compared, 3);
+}
+
+// --lockstep: a frame waits for every drone's detections of the previous frame. Drone 0's
+// "detector" (this test) answers every frame; drone 1 has none, so it times out once and is then
+// not waited for: exactly one lockstep_timeouts, naming drone 1.
+TEST_F(SimApp, LockstepWaitsForTheDetectorsAndGoesOnWithoutASilentOne) {
+  Listener l(listen_url(7814));
+  int64_t answered = 0;
+  struct Answer {
+    lcm::LCM* lcm;
+    int64_t* answered;
+    void on(const lcm::ReceiveBuffer* b, const std::string&) {
+      fact::frame_t f;
+      if (!fact::app::decode_error(b->data, static_cast<int>(b->data_size), &f).empty()) return;
+      fact::detections_t d;
+      d.utime = f.utime;
+      d.drone_id = f.drone_id;
+      d.frame_seq = f.seq;
+      d.count = 0;
+      lcm->publish("FACT_DETECTIONS_0", &d);
+      ++*answered;
+    }
+  } answer{&l.lcm(), &answered};
+  l.lcm().subscribe("FACT_FRAMES_0", &Answer::on, &answer);
+  SimProcess sim({"--duration", "1.0", "--rate", "0", "--drones", "2", "--camera-rate", "10", "--lockstep",
+                  "--lockstep-timeout", "0.3", "--lcm-url", url(7814)});
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(l.pump_until([&] { return l.stopped(); })) << sim.err();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(sim.wait(), 0) << sim.err();
+  EXPECT_EQ(l.counter("lockstep_timeouts"), 1) << sim.err();
+  EXPECT_NE(sim.err().find("drone 1's detector has not answered"), std::string::npos) << sim.err();
+  EXPECT_EQ(sim.err().find("drone 0's detector has not answered"), std::string::npos) << sim.err();
+  EXPECT_GE(wall, 0.3);            // the one timeout was waited out
+  EXPECT_GE(answered, 10);         // 1 s at 10 Hz: frames 0..10
+}
+
+TEST(SimAppFlags, PrintIdsAndBadRunFlags) {
+  {
+    const std::string cmd = std::string(FACT_SIM_BINARY) + " --print-ids --world " FACT_WORLDS_DIR "/small.json --drones 5";
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[128] = {0};
+    const size_t n = fread(buf, 1, sizeof buf - 1, p);
+    EXPECT_EQ(pclose(p), 0);
+    EXPECT_EQ(std::string(buf, n), "0 1 2 3 4\n");  // small.json: ids 0..count-1
+  }
+  for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--render-threads", "0"}, {"--lockstep-timeout", "-1"}}) {
+    SimProcess sim({flag, value, "--lcm-url", "memq://"});
+    EXPECT_EQ(sim.wait(), 2) << flag;
+    EXPECT_NE(sim.err().find(flag), std::string::npos) << sim.err();
+  }
 }
 
 TEST(SimAppFlags, BadWorldFileAndFlagsExitTwoWithTheReason) {

@@ -77,6 +77,7 @@ struct Options {
   double lockstep_timeout = 2.0;    // s of wall time a frame waits for a detector before going on without it
   std::string detections_channel = "FACT_DETECTIONS";
   bool print_ids = false;           // print the drones' ids (world + --drones) and exit
+  int render_threads = 2;           // threads rendering the drones' cameras
 };
 
 struct FlagError : std::runtime_error {
@@ -114,9 +115,9 @@ void add_flags(CLI::App& app, Options& o) {
       ->type_name("ADDR")->capture_default_str();
   app.add_flag("--fc-auto-arm", o.fc_auto_arm, "Start the simulated flight controllers armed in OFFBOARD mode");
   app.add_option("--frames-url", o.frames_url,
-                 "LCM URL template for each drone's frames, \"{id}\" replaced by the drone id (e.g. "
-                 "udpm://239.255.77.{id}:7667?ttl=1): a camera group per drone that only its detector and "
-                 "planner join. Default: frames go on --lcm-url")
+                 "LCM URL template for each drone's frames, \"{id}\" replaced by the drone id and \"{B+id}\" by "
+                 "B + id (e.g. udpm://239.255.77.{id}:{7700+id}?ttl=1): a camera group and port per drone that "
+                 "only its detector and planner join. Default: frames go on --lcm-url")
       ->type_name("URL");
   app.add_flag("--lockstep", o.lockstep,
                "Before each frame, wait until every drone's detector has answered the previous one "
@@ -125,6 +126,8 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--lockstep-timeout", o.lockstep_timeout,
                  "s of wall time a frame waits for a detector; after that the drone is not waited for "
                  "until its detector catches up")
+      ->capture_default_str();
+  app.add_option("--render-threads", o.render_threads, "Threads rendering the cameras (1-64; frames do not depend on it)")
       ->capture_default_str();
   app.add_flag("--print-ids", o.print_ids, "Print the drones' ids (from the world and --drones), space separated, and exit");
   app.add_option("--detections-channel", o.detections_channel, "Detections channel base (+ _<id>), for --lockstep")
@@ -163,6 +166,8 @@ void check(const Options& o) {
   check_rate("--truth-rate", o.truth_rate, false);
   check_rate("--spin-rate", o.spin_rate, false);
   check_rate("--lockstep-timeout", o.lockstep_timeout, false);
+  if (o.render_threads < 1 || o.render_threads > 64)
+    throw FlagError("--render-threads: expected 1-64, got " + std::to_string(o.render_threads));
   if (o.spin_rate > 1.5) throw FlagError("--spin-rate: at most the yaw-rate limit 1.5 rad/s, got " + std::to_string(o.spin_rate));
   if (o.drones < 0 || o.drones > 64) throw FlagError("--drones: expected 1 ... 64, got " + std::to_string(o.drones));
   fact::sim::Script s;
@@ -240,6 +245,8 @@ struct Drone {
   std::unique_ptr<fact::sim_fc::SimFc> fc;      // with --mavlink-port: its simulated PX4
   std::unique_ptr<fact::sim_fc::FcPort> fc_port;
   lcm::LCM* frames_lcm = nullptr;   // where its frames go (--frames-url), else the main LCM
+  std::unique_ptr<fact::sim::Renderer> renderer;  // its camera, with its own noise stream
+  fact::sim::RenderedFrame frame;   // its newest rendered frame
   int64_t answered_utime = -1;      // --lockstep: newest frame utime its detector answered
   bool waited_out = false;          // --lockstep: timed out; not waited for until it catches up
 };
@@ -249,16 +256,18 @@ class Simulator {
   Simulator(const Options& o, fact::sim::World world, lcm::LCM* lcm, fact::app::Status* status,
             const fact::app::Log* log)
       : o_(o), world_(std::move(world)), lcm_(lcm), status_(status), log_(log),
-        renderer_(world_, parse_resolution(o.resolution), fact::CameraExtrinsics(), render_options(o),
-                  make_rng(o.seed, 2)()),
+        intrinsics_(parse_resolution(o.resolution)),
         drift_rng_(make_rng(o.seed, 1)) {
     fact::sim::parse_script(o.script, &script_);
     std::mt19937_64 height_rng = make_rng(o.seed, 3);
     const auto& c = world_.drone_config;
     std::uniform_real_distribution<double> height(c.height_min, c.height_max);
+    std::mt19937_64 noise_seeds = make_rng(o.seed, 2);  // one depth-noise stream per drone's camera
     for (const auto& s : world_.starts) {
       Drone d;
       d.sim = fact::sim::make_drone(s);
+      d.renderer = std::make_unique<fact::sim::Renderer>(world_, intrinsics_, fact::CameraExtrinsics(),
+                                                         render_options(o), noise_seeds());
       d.script.height = height(height_rng);
       if (script_ != fact::sim::Script::none) {
         d.sim.landed = false;
@@ -304,9 +313,28 @@ class Simulator {
     return "";
   }
 
+  // The template with "{id}" replaced by the id and "{B+id}" (B an integer) by B + id, so each drone
+  // can have its own group and port: Linux hands a udpm socket bound to a port the datagrams of
+  // every group joined on that port in its network namespace, so a group alone does not separate
+  // drones that share a namespace.
   static std::string frames_url_for(std::string url, int id) {
-    for (size_t at = url.find("{id}"); at != std::string::npos; at = url.find("{id}", at))
-      url.replace(at, 4, std::to_string(id));
+    for (size_t at = url.find('{'); at != std::string::npos; at = url.find('{', at)) {
+      const size_t end = url.find('}', at);
+      if (end == std::string::npos) break;
+      const std::string key = url.substr(at + 1, end - at - 1);
+      std::string value;
+      if (key == "id") {
+        value = std::to_string(id);
+      } else if (key.size() > 3 && key.compare(key.size() - 3, 3, "+id") == 0 &&
+                 key.find_first_not_of("0123456789") == key.size() - 3) {
+        value = std::to_string(std::stol(key.substr(0, key.size() - 3)) + id);
+      } else {
+        ++at;
+        continue;
+      }
+      url.replace(at, end - at + 1, value);
+      at += value.size();
+    }
     return url;
   }
 
@@ -538,13 +566,10 @@ class Simulator {
   bool publish_frames(int64_t utime) {
     if (o_.lockstep && last_frame_utime_ >= 0 && !wait_for_detectors(last_frame_utime_)) return false;
     last_frame_utime_ = utime;
-    const std::vector<fact::sim::DronePose> p = poses();
-    const fact::CameraIntrinsics& k = renderer_.intrinsics();
+    render_all();
+    const fact::CameraIntrinsics& k = intrinsics_;
     for (size_t i = 0; i < drones_.size(); ++i) {
-      const auto t0 = std::chrono::steady_clock::now();
-      renderer_.render(p, static_cast<int>(i), &frame_);
-      render_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      ++renders_;
+      const fact::sim::RenderedFrame& frame_ = drones_[i].frame;
       fact::frame_t m;
       m.utime = utime;
       m.drone_id = drones_[i].sim.id;
@@ -565,6 +590,25 @@ class Simulator {
       status_->count("frames");
     }
     return true;
+  }
+
+  // Renders every drone's camera at the current poses, split over --render-threads threads (drone
+  // i on thread i mod T; each drone has its own renderer and noise stream, so the frames do not
+  // depend on T).
+  void render_all() {
+    const std::vector<fact::sim::DronePose> p = poses();
+    const size_t n = drones_.size();
+    const size_t threads = std::min<size_t>(static_cast<size_t>(o_.render_threads), n);
+    auto work = [&](size_t first) {
+      for (size_t i = first; i < n; i += threads) drones_[i].renderer->render(p, static_cast<int>(i), &drones_[i].frame);
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<std::thread> pool;
+    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    work(0);
+    for (std::thread& t : pool) t.join();
+    render_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    renders_ += static_cast<int64_t>(n);
   }
 
   void publish_truth(int64_t utime) {
@@ -623,8 +667,7 @@ class Simulator {
   lcm::LCM* lcm_;
   fact::app::Status* status_;
   const fact::app::Log* log_;
-  fact::sim::Renderer renderer_;
-  fact::sim::RenderedFrame frame_;
+  fact::CameraIntrinsics intrinsics_;
   std::mt19937_64 drift_rng_;
   fact::sim::Script script_ = fact::sim::Script::none;
   fact::sim::ControllerGains gains_;
