@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds every app and fact-bench-e2e, runs whole simulated
+# initializations (scripts/run-sim.sh --fast per swarm size and seed, in private network
+# namespaces), writes bench/results/e2e_runs.csv, e2e.csv, e2e_summary.txt, then draws
+# bench/results/e2e.png (bench/plots/e2e.gp). Extra arguments go to fact-bench-e2e (try --help,
+# --drones 2,4 --seeds 5 for a quick look). BUILD_DIR=... builds elsewhere (default: build/).
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${BUILD_DIR:-$here/build}"
+"$here/scripts/install-deps.sh"
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j "$(nproc)" --target fact-bench-e2e fact-sim fact-detector fact-vio-relay fact-gossip \
+  fact-solver fact-planner fact-fc-bridge fact-run-report
+cd "$here"
+out_dir="bench/results"
+args=("$@")
+for ((i = 0; i < ${#args[@]}; ++i)); do
+  case "${args[i]}" in
+    --help|-h) exec "$build/bench/fact-bench-e2e" --help ;;
+    --out-dir) out_dir="${args[i + 1]:-$out_dir}" ;;
+    --out-dir=*) out_dir="${args[i]#--out-dir=}" ;;
+  esac
+done
+start=$(date +%s)
+"$build/bench/fact-bench-e2e" --repo "$here" --build "$build" "$@"
+echo "== plot"
+gnuplot -e "dir='$out_dir'" "$here/bench/plots/e2e.gp"
+echo "  $out_dir/e2e.png"
+echo "== done in $(($(date +%s) - start)) s"

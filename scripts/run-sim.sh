@@ -1,0 +1,312 @@
+#!/usr/bin/env bash
+# The main job: a simulated swarm initializing end to end. fact-sim plays N drones in a room with
+# obstacles; every drone runs its own full set of apps (fact-detector, fact-vio-relay, fact-gossip,
+# fact-solver, fact-planner, fact-fc-bridge) in its own private network namespace, talking udpm://
+# with ttl=1 across a bridge this script makes (never on the machine's real interfaces). The loop
+# runs takeoff → spin → detect → gossip → solve → move … until the swarm's result is certified.
+#
+#   scripts/run-sim.sh                      4 drones, default world, real time, files in build/run-sim
+#   scripts/run-sim.sh --drones 3 --world apps/fact_sim/worlds/small.json --fast --out /tmp/r
+#
+# Flags (see --help): --drones N, --world FILE, --seed S, --realtime | --fast, --out DIR,
+# --max-sim-time S, --resolution WxH, --camera-rate HZ, --shared-namespace, --no-build, --quiet.
+# Writes to --out: run.lcm (LCM log of the swarm bus: odometry, detections, gossip, rounds,
+# results, setpoints, FC state, truth, clock, status; frames stay on the per-drone camera groups),
+# run.png (top-down picture), report.json (fact-run-report-v1), cpu.csv (CPU per app per drone),
+# logs/<app>-<id>.log. Exit codes: 0 certified and within the error bounds; 3 not certified
+# (no certified result within --max-sim-time, or a planner gave up); 4 certified but outside the
+# bounds (certified-wrong); 1 a process failed; 2 bad flags; 125 no private network namespace.
+set -euo pipefail
+[ -n "${FACT_RUN_SIM_TRACE:-}" ] && set -x  # FACT_RUN_SIM_TRACE=1: trace the script
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+usage() {
+  sed -n '2,20p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  cat <<EOF
+Flags:
+  --drones N          drones (default: the world's count, 4 in the default world)
+  --world FILE        fact-world-v1 world (default: apps/fact_sim/worlds/default.json)
+  --seed S            seed of the simulator and the planners (default 1)
+  --realtime          simulated time runs at wall-clock speed (default)
+  --fast              as fast as the machine allows (at most --fast-rate x real time); every
+                      frame waits for the detectors (fact-sim --lockstep) so nothing is dropped
+  --fast-rate X       cap of --fast (default 8)
+  --out DIR           output folder (default build/run-sim)
+  --max-sim-time S    give up after S simulated seconds (default 150)
+  --resolution WxH    camera: 640x480 (default) or 424x240
+  --camera-rate HZ    frames per second per drone (default 10)
+  --yaw-bound RAD     error bounds of a correct result (default 0.05 rad, 0.20 m)
+  --position-bound M
+  --spin-rate RAD/S   the planners' spin rate (default 1.2)
+  --max-rounds K      a planner holds, not certified, after K spins (default 8)
+  --shared-namespace  all drones in one private namespace (what runs without root)
+  --no-build          use the binaries in \$BUILD_DIR (default build/) as they are
+  --quiet             no live event lines (the table and the verdict are still printed)
+Environment: BUILD_DIR (default <repo>/build).
+EOF
+}
+
+# ---------------------------------------------------------------- flags
+drones="" world="$here/apps/fact_sim/worlds/default.json" seed=1 mode=realtime fast_rate=8
+out="" max_sim=150 resolution=640x480 camera_rate=10 yaw_bound=0.05 position_bound=0.20
+shared=0 build=1 quiet=0 spin_rate=1.2 max_rounds=8
+die_usage() { echo "run-sim: $*" >&2; echo "run-sim: see --help" >&2; exit 2; }
+need_value() { [ "$#" -ge 2 ] && [ -n "$2" ] || die_usage "$1 needs a value"; }
+while [ "$#" -gt 0 ]; do
+  case "$1" in
+    -h|--help) usage; exit 0 ;;
+    --drones) need_value "$@"; drones=$2; shift 2 ;;
+    --world) need_value "$@"; world=$2; shift 2 ;;
+    --seed) need_value "$@"; seed=$2; shift 2 ;;
+    --realtime) mode=realtime; shift ;;
+    --fast) mode=fast; shift ;;
+    --fast-rate) need_value "$@"; fast_rate=$2; shift 2 ;;
+    --out) need_value "$@"; out=$2; shift 2 ;;
+    --max-sim-time) need_value "$@"; max_sim=$2; shift 2 ;;
+    --resolution) need_value "$@"; resolution=$2; shift 2 ;;
+    --camera-rate) need_value "$@"; camera_rate=$2; shift 2 ;;
+    --yaw-bound) need_value "$@"; yaw_bound=$2; shift 2 ;;
+    --position-bound) need_value "$@"; position_bound=$2; shift 2 ;;
+    --spin-rate) need_value "$@"; spin_rate=$2; shift 2 ;;
+    --max-rounds) need_value "$@"; max_rounds=$2; shift 2 ;;
+    --shared-namespace) shared=1; shift ;;
+    --no-build) build=0; shift ;;
+    --quiet) quiet=1; shift ;;
+    *) die_usage "unknown flag '$1'" ;;
+  esac
+done
+is_uint() { [[ "$1" =~ ^[0-9]+$ ]]; }
+is_num() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]]; }
+[ -z "$drones" ] || { is_uint "$drones" && [ "$drones" -ge 2 ] && [ "$drones" -le 32 ]; } ||
+  die_usage "--drones: expected an integer 2..32, got '$drones'"
+is_uint "$seed" || die_usage "--seed: expected a non-negative integer, got '$seed'"
+for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_rate" \
+            "yaw-bound:$yaw_bound" "position-bound:$position_bound" "spin-rate:$spin_rate" "max-rounds:$max_rounds"; do
+  is_num "${pair#*:}" && awk -v v="${pair#*:}" 'BEGIN { exit !(v > 0) }' ||
+    die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
+done
+case "$resolution" in 640x480|424x240) ;; *) die_usage "--resolution: expected 640x480 or 424x240, got '$resolution'" ;; esac
+[ -r "$world" ] || die_usage "--world: cannot read '$world'"
+world="$(cd "$(dirname "$world")" && pwd)/$(basename "$world")"
+
+build_dir="${BUILD_DIR:-$here/build}"
+out="${out:-$build_dir/run-sim}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+
+# ---------------------------------------------------------------- install and build (outside the namespace)
+if [ -z "${FACT_RUN_SIM_INNER:-}" ]; then
+  targets=(fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge fact-run-report)
+  if [ "$build" = 1 ]; then
+    "$here/scripts/install-deps.sh"
+    mkdir -p "$build_dir"
+    cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >"$build_dir.configure.log" 2>&1 ||
+      { cat "$build_dir.configure.log"; exit 1; }
+    echo "== building ${targets[*]}"
+    cmake --build "$build_dir" -j "$(nproc)" --target "${targets[@]}" >"$build_dir.build.log" 2>&1 ||
+      { tail -n 60 "$build_dir.build.log"; echo "run-sim: build failed (full log: $build_dir.build.log)" >&2; exit 1; }
+  fi
+  # Choose the network: per-drone namespaces (root), else one unprivileged namespace, else refuse.
+  export FACT_RUN_SIM_BUILD="$build_dir"
+  for tool in unshare ip; do
+    command -v "$tool" >/dev/null 2>&1 || { echo "run-sim: '$tool' not found (install util-linux / iproute2)" >&2; exit 125; }
+  done
+  args=(--world "$world" --seed "$seed" --fast-rate "$fast_rate" --out "$out" --max-sim-time "$max_sim"
+        --resolution "$resolution" --camera-rate "$camera_rate" --yaw-bound "$yaw_bound"
+        --position-bound "$position_bound" --spin-rate "$spin_rate" --max-rounds "$max_rounds" --no-build)
+  [ -n "$drones" ] && args+=(--drones "$drones")
+  [ "$mode" = fast ] && args+=(--fast)
+  [ "$quiet" = 1 ] && args+=(--quiet)
+  if [ "$shared" = 0 ] && [ "$(id -u)" -eq 0 ] && unshare --net -- ip netns list >/dev/null 2>&1; then
+    FACT_RUN_SIM_INNER=netns exec "$here/scripts/netns-run.sh" bash "${BASH_SOURCE[0]}" "${args[@]}"
+  fi
+  if unshare -rn true 2>/dev/null; then
+    [ "$shared" = 0 ] && echo "run-sim: not root (or no 'ip netns'): all drones share one private namespace (unshare -rn)"
+    FACT_RUN_SIM_INNER=shared exec unshare -rn -- sh -c '
+      ip link set lo up && ip route add 224.0.0.0/4 dev lo || { echo "run-sim: cannot set up lo in the namespace" >&2; exit 125; }
+      exec "$@"' run-sim bash "${BASH_SOURCE[0]}" "${args[@]}" --shared-namespace
+  fi
+  echo "run-sim: needs a private network namespace so that multicast never leaves this machine:" >&2
+  echo "  run as root (per-drone namespaces with 'ip netns'), or allow unprivileged user namespaces" >&2
+  echo "  (sysctl kernel.unprivileged_userns_clone=1) for 'unshare -rn'. Not falling back to real interfaces." >&2
+  exit 125
+fi
+
+# ---------------------------------------------------------------- inside the private namespace
+B="$FACT_RUN_SIM_BUILD"
+bin_sim="$B/apps/fact_sim/fact-sim" bin_det="$B/apps/fact_detector/fact-detector" bin_vio="$B/apps/fact-vio-relay"
+bin_gos="$B/apps/fact-gossip" bin_sol="$B/apps/fact-solver" bin_pla="$B/apps/fact_planner/fact-planner"
+bin_fcb="$B/firmware_bridge/fact-fc-bridge" bin_rep="$B/apps/fact_run_report/fact-run-report"
+for b in "$bin_sim" "$bin_det" "$bin_vio" "$bin_gos" "$bin_sol" "$bin_pla" "$bin_fcb" "$bin_rep"; do
+  [ -x "$b" ] || { echo "run-sim: $b is missing (build first, or drop --no-build)" >&2; exit 1; }
+done
+command -v lcm-logger >/dev/null || { echo "run-sim: lcm-logger not found (liblcm-bin)" >&2; exit 1; }
+
+# The drones' ids, from the world (and --drones) as fact-sim sees them.
+ids=$("$bin_sim" --world "$world" ${drones:+--drones "$drones"} --print-ids) ||
+  { echo "run-sim: fact-sim could not read the world $world" >&2; exit 2; }
+n=$(echo "$ids" | wc -w)
+
+BUS='udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152'
+# Frames: a multicast group and port per drone ({id} and {7700+id} are filled in per drone), so a
+# drone's apps never receive another drone's frames, even when the drones share a namespace.
+FRAMES='udpm://239.255.77.{id}:{7700+id}?ttl=1&recv_buf_size=8388608'
+frames_url() { local u=${FRAMES//\{id\}/$1}; echo "${u//\{7700+id\}/$((7700 + $1))}"; }
+MAV_BASE=14600
+prefix="fact-run-$$"
+sim_addr=127.0.0.1
+rm -rf "$out/logs"
+mkdir -p "$out/logs"
+rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv"
+
+pids=() names=()
+cleanup() {
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  sleep 0.3
+  for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+  if [ "$FACT_RUN_SIM_INNER" = netns ]; then
+    for id in $ids; do ip netns del "$prefix-$id" 2>/dev/null || true; done
+    ip link del fact-br0 2>/dev/null || true
+  fi
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+# ns_prefix ID: the command prefix that enters drone ID's namespace (none in shared mode). nsenter
+# execs the command itself (ip netns exec forks), so $! is the app and signals reach it.
+ns_prefix() {
+  if [ "$FACT_RUN_SIM_INNER" = netns ] && [ "$1" -ge 0 ]; then echo "nsenter --net=/var/run/netns/$prefix-$1 --"; fi
+}
+
+if [ "$FACT_RUN_SIM_INNER" = netns ]; then
+  # bridge fact-br0 (10.79.0.254) in this outer private namespace; a veth into each drone's namespace.
+  sim_addr=10.79.0.254
+  ip link add fact-br0 type bridge
+  ip addr add "$sim_addr/24" dev fact-br0
+  ip link set fact-br0 up
+  ip route replace 224.0.0.0/4 dev fact-br0
+  k=1
+  for id in $ids; do
+    ns="$prefix-$id"
+    ip netns add "$ns"
+    ip link add "fv$id" type veth peer name eth0 netns "$ns"
+    ip link set "fv$id" master fact-br0 up
+    ip -n "$ns" link set lo up
+    ip -n "$ns" addr add "10.79.0.$k/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" route add 224.0.0.0/4 dev eth0
+    k=$((k + 1))
+  done
+  echo "== network: bridge fact-br0 in a private namespace, drones ${ids// /,} each in its own namespace (veth, udpm ttl=1)"
+else
+  echo "== network: one private namespace (lo), drones ${ids// /,} share it"
+fi
+
+# start NAME ID CMD...: starts CMD in the background (in drone ID's namespace when ID >= 0), stderr
+# and stdout to logs/NAME.log; $! is CMD's own pid.
+start() {
+  local name=$1 id=$2 pre
+  shift 2
+  read -r -a pre <<<"$(ns_prefix "$id")"
+  "${pre[@]}" "$@" >"$out/logs/$name.log" 2>&1 &
+  pids+=("$!")
+  names+=("$name")
+}
+
+lcm-logger --lcm-url="$BUS" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
+logger_pid=$!
+
+for id in $ids; do
+  c=(--drone-id "$id" --lcm-url "$BUS" --sim-clock)
+  start "fact-vio-relay-$id" "$id" "$bin_vio" "${c[@]}"
+  start "fact-detector-$id" "$id" "$bin_det" "${c[@]}" --frames-url "$(frames_url "$id")"
+  start "fact-gossip-$id" "$id" "$bin_gos" "${c[@]}" --insecure --min-members "$n" --roster "${ids// /,}"
+  start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}"
+  start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(frames_url "$id")" --seed "$((seed * 100 + id))" \
+    --spin-rate "$spin_rate" --max-rounds "$max_rounds"
+  start "fact-fc-bridge-$id" "$id" "$bin_fcb" "${c[@]}" --udp "$((14540 + id)):$sim_addr:$((MAV_BASE + id))" --arm --offboard
+done
+
+rate=1
+[ "$mode" = fast ] && rate=$fast_rate
+sim_flags=(--world "$world" ${drones:+--drones "$drones"} --seed "$seed" --rate "$rate" --duration "$max_sim"
+           --resolution "$resolution" --camera-rate "$camera_rate" --lcm-url "$BUS" --frames-url "$FRAMES"
+           --mavlink-port "$MAV_BASE" --mavlink-bind "$sim_addr" --lockstep)
+sleep 0.5  # let every app subscribe before the clock starts
+start fact-sim -1 "$bin_sim" "${sim_flags[@]}"
+sim_pid=$!
+wall0=$(date +%s.%N)
+echo "== $n drones (${ids// /,}), world $(basename "$world"), seed $seed, $mode (sim rate ${rate}x at most), $resolution at $camera_rate Hz; logs in $out/logs"
+
+# Live: one line per event from every app's log.
+if [ "$quiet" = 0 ]; then
+  (cd "$out/logs" && exec tail --pid=$$ -q -n +1 -F fact-*.log 2>/dev/null |
+    grep --line-buffered -E "state: |own round [0-9]+ closed|estimate: |error|failsafe|lockstep:|exit:|sim t = [0-9]+0\.0 s|took off|armed|OFFBOARD" |
+    sed -u -E 's/^[0-9T:.-]+Z //') &
+  pids+=("$!")
+  names+=("live")
+fi
+
+# running PID: the process exists and has not exited (an exited child stays a zombie until waited
+# for, and kill -0 still succeeds on it).
+running() {
+  local st
+  st=$(cut -d' ' -f3 "/proc/$1/stat" 2>/dev/null) || return 1
+  [ -n "$st" ] && [ "$st" != Z ] && [ "$st" != X ]
+}
+
+# Wait until every planner is done (holding a certified result, or giving up at --max-rounds), the
+# simulator runs out of time, or a process dies. The apps keep running until their CPU is read.
+verdict=""
+while :; do
+  if ! running "$sim_pid"; then verdict="the simulator ended (--max-sim-time $max_sim s reached?)"; break; fi
+  done_count=0
+  for i in "${!pids[@]}"; do
+    [ "${names[$i]}" = live ] && continue
+    running "${pids[$i]}" || { verdict="${names[$i]} exited early (see $out/logs/${names[$i]}.log)"; break 2; }
+  done
+  for id in $ids; do grep -a -q "state: done" "$out/logs/fact-planner-$id.log" && done_count=$((done_count + 1)); done
+  [ "$done_count" -eq "$n" ] && { verdict="every planner is done"; break; }
+  sleep 0.2
+done
+wall1=$(date +%s.%N)
+
+# CPU per app per drone, read from /proc before anything is stopped or reaped (an exited planner
+# is a zombie until waited for, and its stat still holds its CPU time).
+hz=$(getconf CLK_TCK)
+wall_s=$(awk -v a="$wall0" -v b="$wall1" 'BEGIN { printf "%.3f", b - a }')
+echo "app,drone,cpu_s,wall_s,cpu_percent" >"$out/cpu.csv"
+for i in "${!pids[@]}"; do
+  name=${names[$i]} pid=${pids[$i]}
+  [ "$name" = live ] && continue
+  [ -r "/proc/$pid/stat" ] || continue
+  read -r -a st <"/proc/$pid/stat" || continue
+  ticks=$((st[13] + st[14]))
+  app=${name%-*} id=${name##*-}
+  [ "$name" = fact-sim ] && { app=fact-sim; id=-1; }
+  awk -v a="$app" -v i="$id" -v t="$ticks" -v hz="$hz" -v w="$wall_s" \
+    'BEGIN { printf "%s,%s,%.3f,%.3f,%.2f\n", a, i, t / hz, w, 100 * t / hz / w }' >>"$out/cpu.csv"
+done
+
+cleanup_rc=0
+for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+pids=()
+sleep 0.2
+kill -INT "$logger_pid" 2>/dev/null || true
+wait "$logger_pid" 2>/dev/null || true
+
+echo "== run ended: $verdict, after $(printf '%.1f' "$wall_s") s of wall time"
+planner_codes=""
+for id in $ids; do
+  line=$(grep -a -E "state: done" "$out/logs/fact-planner-$id.log" | tail -n 1 | sed -E 's/^[0-9T:.-]+Z //' || true)
+  [ -n "$line" ] && planner_codes+="  $line"$'\n'
+done
+[ -n "$planner_codes" ] && printf '%s' "$planner_codes" | cut -c1-200
+
+rc=0
+"$bin_rep" --log "$out/run.lcm" --world "$world" --png "$out/run.png" --json "$out/report.json" \
+  --yaw-bound "$yaw_bound" --position-bound "$position_bound" || rc=$?
+echo "== files: $out/run.lcm (LCM log), $out/run.png (picture), $out/report.json, $out/cpu.csv, $out/logs/"
+if [ "$rc" -eq 0 ]; then echo "== certified and correct"; fi
+exit "$rc"

@@ -1,0 +1,17 @@
+# The main job end to end (scripts/run-sim.sh): 3 simulated drones on the small world, each with
+# its full app set in a private network namespace, --fast; the certified result is judged against
+# ground truth by fact-run-report. Serial: it times nothing, but it is the heaviest test.
+set(FACT_E2E_TARGETS fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge
+    fact-run-report)
+set(FACT_E2E_READY TRUE)
+foreach(t IN LISTS FACT_E2E_TARGETS)
+  if(NOT TARGET ${t})
+    set(FACT_E2E_READY FALSE)
+  endif()
+endforeach()
+if(FACT_E2E_READY)
+  add_test(NAME e2e_run_sim_3_drones
+    COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/test_e2e_run_sim.sh ${PROJECT_SOURCE_DIR} ${CMAKE_BINARY_DIR}
+            ${CMAKE_BINARY_DIR}/e2e-run-sim)
+  set_tests_properties(e2e_run_sim_3_drones PROPERTIES TIMEOUT 400 RUN_SERIAL TRUE SKIP_RETURN_CODE 77)
+endif()

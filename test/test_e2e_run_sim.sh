@@ -1,0 +1,47 @@
+#!/bin/sh
+# End-to-end test: the README's main job on a small world. scripts/run-sim.sh runs fact-sim with
+# 3 drones and every drone's full app set (detector, VIO relay, gossip, solver, planner, bridge)
+# in private network namespaces, --fast (lockstep with the detectors), then fact-run-report judges
+# the swarm's certified result against the simulator's ground truth. Passes when run-sim.sh exits
+# 0 (certified, every drone's frame within the bounds below) and it wrote the log, the picture and
+# a report whose numbers agree with the bounds.
+#
+#   test/test_e2e_run_sim.sh REPO BUILD_DIR OUT_DIR
+#
+# Exit 77 (skipped) when no private network namespace can be made here.
+set -eu
+if [ "$#" -ne 3 ]; then
+  echo "usage: $0 REPO BUILD_DIR OUT_DIR" >&2
+  exit 2
+fi
+REPO=$1 BUILD=$2 OUT=$3
+YAW_BOUND=0.03      # rad, every drone's frame yaw
+POSITION_BOUND=0.15 # m, every drone's frame origin
+rm -rf "$OUT"
+rc=0
+BUILD_DIR="$BUILD" "$REPO/scripts/run-sim.sh" --no-build --quiet --fast --drones 3 \
+  --world "$REPO/apps/fact_sim/worlds/small.json" --seed 1 --max-sim-time 120 --out "$OUT" \
+  --yaw-bound "$YAW_BOUND" --position-bound "$POSITION_BOUND" || rc=$?
+if [ "$rc" -eq 125 ]; then
+  echo "test_e2e_run_sim: no private network namespace here: skipped" >&2
+  exit 77
+fi
+fail() {
+  echo "test_e2e_run_sim: $*" >&2
+  for f in "$OUT"/logs/fact-planner-*.log "$OUT"/logs/fact-solver-*.log "$OUT"/logs/fact-sim.log; do
+    [ -f "$f" ] && { echo "--- $f" >&2; tail -n 8 "$f" | cut -c1-300 >&2; }
+  done
+  exit 1
+}
+[ "$rc" -eq 0 ] || fail "run-sim.sh exited $rc (0 = certified and within bounds)"
+for f in run.lcm run.png report.json cpu.csv; do
+  [ -s "$OUT/$f" ] || fail "$OUT/$f is missing or empty"
+done
+# The PNG signature, and the report's own verdict.
+[ "$(head -c 8 "$OUT/run.png" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] || fail "run.png is not a PNG"
+grep -q '"certified": *true' "$OUT/report.json" || fail "report.json does not say certified"
+# Every drone's apps were measured.
+for app in fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge; do
+  [ "$(grep -c "^$app," "$OUT/cpu.csv")" -eq 3 ] || fail "cpu.csv lacks $app for 3 drones"
+done
+echo "test_e2e_run_sim: certified and within $YAW_BOUND rad / $POSITION_BOUND m"
