@@ -157,7 +157,7 @@ prefix="fact-run-$$"
 sim_addr=127.0.0.1
 rm -rf "$out/logs"
 mkdir -p "$out/logs"
-rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv"
+rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-params.txt"
 
 pids=() names=()
 cleanup() {
@@ -213,7 +213,12 @@ start() {
   names+=("$name")
 }
 
-lcm-logger --lcm-url="$BUS" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
+# What a replay needs to start the same planners (scripts/replay.sh reads it): key=value lines.
+printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\n' "${ids// /,}" "$seed" "$spin_rate" "$max_rounds" >"$out/run-params.txt"
+
+# The recorder runs at a higher priority (where allowed), so that a loaded machine does not make it
+# drop messages from its socket buffer.
+nice -n -5 lcm-logger --lcm-url="$BUS" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
 logger_pid=$!
 
 for id in $ids; do
@@ -269,6 +274,9 @@ while :; do
   [ "$done_count" -eq "$n" ] && { verdict="every planner is done"; break; }
   sleep 0.2
 done
+# A second more of the run, so the log also holds what follows the last decision (a replay's
+# planners, a little behind, need it).
+[ "$verdict" = "every planner is done" ] && sleep 1
 wall1=$(date +%s.%N)
 
 # CPU per app per drone, read from /proc before anything is stopped or reaped (an exited planner
@@ -292,7 +300,14 @@ cleanup_rc=0
 for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
 for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
 pids=()
-sleep 0.2
+# Let the recorder drain its socket before it stops: wait until the log stops growing.
+size=-1
+for _ in $(seq 50); do
+  now=$(stat -c %s "$out/run.lcm" 2>/dev/null || echo 0)
+  [ "$now" = "$size" ] && break
+  size=$now
+  sleep 0.2
+done
 kill -INT "$logger_pid" 2>/dev/null || true
 wait "$logger_pid" 2>/dev/null || true
 
@@ -307,6 +322,7 @@ done
 rc=0
 "$bin_rep" --log "$out/run.lcm" --world "$world" --png "$out/run.png" --json "$out/report.json" \
   --yaw-bound "$yaw_bound" --position-bound "$position_bound" || rc=$?
-echo "== files: $out/run.lcm (LCM log), $out/run.png (picture), $out/report.json, $out/cpu.csv, $out/logs/"
+echo "== files: $out/run.lcm (LCM log; replay it with scripts/replay.sh $out/run.lcm), $out/run.png (picture),"
+echo "   $out/report.json, $out/cpu.csv, $out/run-params.txt, $out/logs/"
 if [ "$rc" -eq 0 ]; then echo "== certified and correct"; fi
 exit "$rc"

@@ -4,7 +4,8 @@
 # in private network namespaces, --fast (lockstep with the detectors), then fact-run-report judges
 # the swarm's certified result against the simulator's ground truth. Passes when run-sim.sh exits
 # 0 (certified, every drone's frame within the bounds below) and it wrote the log, the picture and
-# a report whose numbers agree with the bounds.
+# a report whose numbers agree with the bounds; then scripts/replay.sh replays the log into fresh
+# solvers and planners and must show the same results and decisions.
 #
 #   test/test_e2e_run_sim.sh REPO BUILD_DIR OUT_DIR
 #
@@ -45,3 +46,18 @@ for app in fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fac
   [ "$(grep -c "^$app," "$OUT/cpu.csv")" -eq 3 ] || fail "cpu.csv lacks $app for 3 drones"
 done
 echo "test_e2e_run_sim: certified and within $YAW_BOUND rad / $POSITION_BOUND m"
+
+# The replay (scripts/replay.sh): fresh solvers and planners fed the recorded run publish the same
+# results byte for byte and take the same decisions.
+rc=0
+BUILD_DIR="$BUILD" "$REPO/scripts/replay.sh" "$OUT/run.lcm" --no-build --speed 1 --out "$OUT/replay" >"$OUT/replay.out" 2>&1 || rc=$?
+cat "$OUT/replay.out"
+[ "$rc" -eq 0 ] || fail "replay.sh exited $rc (0 = the replay matches)"
+grep -q "the replay matches the recorded run" "$OUT/replay.out" || fail "replay.sh did not say the replay matches"
+[ "$(grep -c "  yes  " "$OUT/replay.out")" -eq 3 ] || fail "replay.sh did not show 3 drones with identical results"
+# Bad input: a log that is not one.
+printf 'not an lcm log' >"$OUT/garbage.lcm"
+rc=0
+BUILD_DIR="$BUILD" "$REPO/scripts/replay.sh" "$OUT/garbage.lcm" --no-build --drones 0 >"$OUT/replay-bad.out" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || { cat "$OUT/replay-bad.out"; fail "replay.sh on a garbage log exited $rc, expected 2"; }
+echo "test_e2e_run_sim: the replay matches; a garbage log is refused"

@@ -1,0 +1,143 @@
+// fact-log-compare: does a replay match the recorded run? Compares two LCM logs (lcm-logger
+// files): every drone's solver results (FACT_RESULT_<id>, fact::swarm_result_t) byte for byte and
+// in order, and every drone's planner decisions (the sequence of "<phase> round <k>" states that
+// fact-planner publishes in its FACT_STATUS heartbeat: takeoff, spin, move, done; waits are left
+// out, see decision()). scripts/replay.sh
+// uses it on the original run's log and the log of fresh processes fed the replayed data.
+//
+//   fact-log-compare ORIGINAL.lcm REPLAY.lcm [--drones 0,1,2] [--no-planner]
+//
+// Prints one table row per drone. Exit codes: 0 everything matches; 1 something differs (the row
+// says what); 2 bad flags, an unreadable log, or no result in the original.
+#include "common/app.h"
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr const char* kApp = "fact-log-compare";
+
+// What one log says about each drone.
+struct DroneTrace {
+  std::vector<std::string> result_bytes;  // FACT_RESULT_<id>, in log order
+  std::string last_status, last_reason;   // of the last result
+  int last_rounds = 0;
+  std::vector<std::string> planner_states;  // "<phase> round <k>", consecutive repeats dropped
+  std::string planner_final;                // the last full state string
+};
+
+// "spin round 1: spin 2π ..." → "spin round 1". Not decisions (""): hovers ("hover: odometry
+// stale ...") and waits ("wait round 1: ..."), whose presence depends on whether the round's result
+// arrived before or after the spin ended, a race between processes, not a choice.
+std::string decision(const std::string& state) {
+  const std::string head = state.substr(0, state.find(':'));
+  if (head.find(" round ") == std::string::npos || head.rfind("wait ", 0) == 0) return "";
+  return head;
+}
+
+bool read_log(const std::string& path, const std::string& result_prefix, const std::string& status_channel,
+              std::map<int, DroneTrace>* out) {
+  lcm::LogFile log(path, "r");
+  if (!log.good()) {
+    std::cerr << kApp << ": error: cannot read the LCM log " << path << "\n";
+    return false;
+  }
+  int64_t undecodable = 0;
+  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
+    if (e->channel.rfind(result_prefix, 0) == 0) {
+      fact::swarm_result_t m;
+      const std::string err = fact::app::decode_error(e->data, e->datalen, &m);
+      if (!err.empty()) {
+        if (undecodable++ < 3) std::cerr << kApp << ": " << path << ": event " << e->eventnum << " on " << e->channel << ": " << err << "\n";
+        continue;
+      }
+      DroneTrace& t = (*out)[m.drone_id];
+      t.result_bytes.emplace_back(static_cast<const char*>(e->data), static_cast<size_t>(e->datalen));
+      t.last_status = m.status;
+      t.last_reason = m.reason;
+      t.last_rounds = m.rounds_used;
+    } else if (e->channel == status_channel) {
+      fact::app_status_t m;
+      if (!fact::app::decode_error(e->data, e->datalen, &m).empty() || m.app != "fact-planner") continue;
+      DroneTrace& t = (*out)[m.drone_id];
+      const std::string d = decision(m.state);
+      if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
+      if (!d.empty()) t.planner_final = m.state;
+    }
+  }
+  return true;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : " → ") + x;
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string original, replay, result_channel = "FACT_RESULT", status_channel = "FACT_STATUS";
+  std::vector<int> drones;
+  bool no_planner = false;
+  CLI::App cli{"fact-log-compare: checks that a replay matches the recorded run: solver results byte for byte,\n"
+               "planner decisions (phase and round sequence, final state).",
+               kApp};
+  cli.add_option("original", original, "LCM log of the recorded run")->required()->type_name("ORIGINAL.lcm");
+  cli.add_option("replay", replay, "LCM log of the replay")->required()->type_name("REPLAY.lcm");
+  cli.add_option("--drones", drones, "Drone ids to compare (default: every drone with a result in the original)")
+      ->delimiter(',');
+  cli.add_option("--result-channel", result_channel, "Result channel base (+ _<id>)")->capture_default_str();
+  cli.add_option("--status-channel", status_channel, "Status channel (the planners' decisions)")->capture_default_str();
+  cli.add_flag("--no-planner", no_planner, "Compare the results only");
+  cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result.");
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e) == 0 ? 0 : 2;
+  }
+  std::map<int, DroneTrace> a, b;
+  if (!read_log(original, result_channel + "_", status_channel, &a) || !read_log(replay, result_channel + "_", status_channel, &b))
+    return 2;
+  if (drones.empty())
+    for (const auto& [id, t] : a)
+      if (!t.result_bytes.empty()) drones.push_back(id);
+  if (drones.empty()) {
+    std::cerr << kApp << ": error: no result on " << result_channel << "_<id> in " << original << "\n";
+    return 2;
+  }
+  bool all = true;
+  std::printf("drone  results orig/replay  identical  last result            planner decisions\n");
+  for (int id : drones) {
+    if (!a.count(id) || a[id].result_bytes.empty()) {
+      std::cerr << kApp << ": error: --drones: drone " << id << " has no result in " << original << "\n";
+      return 2;
+    }
+    const DroneTrace &x = a[id], &y = b[id];
+    const bool same_results = x.result_bytes == y.result_bytes;
+    const bool same_planner = no_planner || (x.planner_states == y.planner_states && !x.planner_states.empty());
+    all = all && same_results && same_planner;
+    std::printf("%5d  %7zu / %-7zu      %-9s  %-9s rounds %-3d  %s\n", id, x.result_bytes.size(), y.result_bytes.size(),
+                same_results ? "yes" : "NO", x.last_status.c_str(), x.last_rounds,
+                no_planner ? "(not compared)" : same_planner ? "same" : "DIFFERENT");
+    if (!same_results) {
+      size_t i = 0;
+      while (i < x.result_bytes.size() && i < y.result_bytes.size() && x.result_bytes[i] == y.result_bytes[i]) ++i;
+      std::printf("       first difference at result %zu of %zu\n", i, x.result_bytes.size());
+    }
+    if (!no_planner) {
+      std::printf("       original: %s\n", join(x.planner_states).c_str());
+      if (!same_planner) std::printf("       replay:   %s\n", join(y.planner_states).c_str());
+    }
+  }
+  std::printf(all ? "== the replay matches the recorded run\n" : "== the replay DIFFERS from the recorded run\n");
+  return all ? 0 : 1;
+}
