@@ -330,7 +330,13 @@ std::vector<Eigen::Vector3d> Generator::place_random() {
     std::vector<Eigen::Vector3d> placed;
     for (int i = 0; i < o_.drones; ++i) {
       for (int t = 0; t < kPlacementTries; ++t) {
-        const Eigen::Vector3d p(uniform(-half, half), uniform(-half, half), draw_height());
+        // The draws are named so their order is fixed (C++ leaves the order of constructor
+        // arguments unspecified: GCC takes them right to left on x86-64, left to right on
+        // aarch64). z, y, x is the order every x86-64 scenario so far was drawn in.
+        const double z = draw_height();
+        const double y = uniform(-half, half);
+        const double x = uniform(-half, half);
+        const Eigen::Vector3d p(x, y, z);
         if (clear_of_others(p, placed, -1) && clear_of_obstacles(p)) {
           placed.push_back(p);
           break;
@@ -375,7 +381,9 @@ void Generator::place_obstacles() {
   for (int k = 0; k < o_.obstacles; ++k) {
     bool placed = false;
     for (int t = 0; t < kObstacleTries && !placed; ++t) {
-      const Eigen::Vector3d c(uniform(-half, half), uniform(-half, half), 0.0);
+      const double y = uniform(-half, half);  // y then x: the order x86-64 drew them in (see above)
+      const double x = uniform(-half, half);
+      const Eigen::Vector3d c(x, y, 0.0);
       placed = std::all_of(origin_.begin(), origin_.end(),
                            [&](const Eigen::Vector3d& spot) { return horizontal_distance(c, spot) >= clearance; });
       if (placed) obstacles_.push_back(Obstacle{c, o_.obstacle_radius, kObstacleHeight});
