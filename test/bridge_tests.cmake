@@ -28,6 +28,7 @@ if(TARGET fact-fc-bridge)
   # decodes every message type the bridge sends. Skips (77) only without npm or the registry.
   add_test(NAME fc_bridge_node_mavlink
     COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test_fc_bridge_node_mavlink.sh ${PROJECT_SOURCE_DIR}
-      $<TARGET_FILE:fact-fc-bridge> $<TARGET_FILE:fact_fc_bridge_peer> ${CMAKE_CURRENT_BINARY_DIR}/fc_bridge_node)
+      $<TARGET_FILE:fact-fc-bridge>${FACT_RUN_SUFFIX} $<TARGET_FILE:fact_fc_bridge_peer>${FACT_RUN_SUFFIX}
+      ${CMAKE_CURRENT_BINARY_DIR}/fc_bridge_node)
   set_tests_properties(fc_bridge_node_mavlink PROPERTIES TIMEOUT 120 SKIP_RETURN_CODE 77)
 endif()
