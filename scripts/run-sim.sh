@@ -30,7 +30,8 @@ Flags:
   --realtime          simulated time runs at wall-clock speed (default)
   --fast              as fast as the machine allows (at most --fast-rate x real time); every
                       frame waits for the detectors (fact-sim --lockstep) so nothing is dropped
-  --fast-rate X       cap of --fast (default 8)
+  --fast-rate X       cap of --fast (default 4: faster multiplies the bus traffic per wall
+                      second, and a loaded machine then drops UDP)
   --out DIR           output folder (default build/run-sim)
   --max-sim-time S    give up after S simulated seconds (default 150)
   --resolution WxH    camera: 640x480 (default) or 424x240
@@ -47,7 +48,7 @@ EOF
 }
 
 # ---------------------------------------------------------------- flags
-drones="" world="$here/apps/fact_sim/worlds/default.json" seed=1 mode=realtime fast_rate=8
+drones="" world="$here/apps/fact_sim/worlds/default.json" seed=1 mode=realtime fast_rate=4
 out="" max_sim=150 resolution=640x480 camera_rate=10 yaw_bound=0.05 position_bound=0.20
 shared=0 build=1 quiet=0 spin_rate=1.2 max_rounds=8
 die_usage() { echo "run-sim: $*" >&2; echo "run-sim: see --help" >&2; exit 2; }
@@ -218,7 +219,7 @@ printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\n' "${ids// /,}" "$seed" "$
 
 # The recorder runs at a higher priority (where allowed), so that a loaded machine does not make it
 # drop messages from its socket buffer.
-nice -n -5 lcm-logger --lcm-url="$BUS" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
+nice -n -5 lcm-logger --lcm-url="${BUS%%&*}&recv_buf_size=16777216" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
 logger_pid=$!
 
 for id in $ids; do
