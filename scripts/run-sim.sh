@@ -147,6 +147,9 @@ command -v lcm-logger >/dev/null || { echo "run-sim: lcm-logger not found (liblc
 ids=$("$bin_sim" --world "$world" ${drones:+--drones "$drones"} --print-ids) ||
   { echo "run-sim: fact-sim could not read the world $world" >&2; exit 2; }
 n=$(echo "$ids" | wc -w)
+for id in $ids; do  # each drone's camera group is 239.255.77.<id>
+  [ "$id" -le 255 ] || { echo "run-sim: drone id $id in $world: run-sim.sh supports ids 0..255" >&2; exit 2; }
+done
 
 BUS='udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152'
 # Frames: a multicast group and port per drone ({id} and {7700+id} are filled in per drone), so a
