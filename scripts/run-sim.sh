@@ -278,9 +278,9 @@ while :; do
   [ "$done_count" -eq "$n" ] && { verdict="every planner is done"; break; }
   sleep 0.2
 done
-# A second more of the run, so the log also holds what follows the last decision (a replay's
-# planners, a little behind, need it).
-[ "$verdict" = "every planner is done" ] && sleep 1
+# About 8 s more of simulated time, so the log also holds what follows the last decision: a
+# replay's planners, behind the originals by their solvers' latency on a loaded machine, need it.
+[ "$verdict" = "every planner is done" ] && sleep "$(awk -v r="$rate" 'BEGIN { printf "%.2f", 8 / r }')"
 wall1=$(date +%s.%N)
 
 # CPU per app per drone, read from /proc before anything is stopped or reaped (an exited planner
