@@ -112,7 +112,7 @@ std::string encode(const T& m) {
 }
 
 // A 10 s run of 3 drones hovering at 1.5 m (static frames, no drift); drone 0 publishes `status`
-// at 8 s with drone 2's yaw off by `yaw_error`.
+// at 8 s with drone 2's yaw off by `yaw_error` (no result at all when `status` is "none").
 std::string write_log(const std::string& status, double yaw_error, bool with_truth = true) {
   const std::string path = (fs::temp_directory_path() / ("fact-report-" + std::to_string(getpid()) + "-" + status +
                                                          std::to_string(yaw_error) + ".lcm")).string();
@@ -160,7 +160,7 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
       tr.yaw.push_back(kFrames[i].frame_yaw + vio_yaw);
     }
     if (with_truth) write_event(log, kEpoch + t, "FACT_TRUTH", encode(tr));
-    if (t == 8000000) write_event(log, kEpoch + t, "FACT_RESULT_0", encode(r));  // in log order, as recorded
+    if (t == 8000000 && status != "none") write_event(log, kEpoch + t, "FACT_RESULT_0", encode(r));  // in log order
   }
   return path;
 }
@@ -219,6 +219,22 @@ TEST(RunReportApp, WrongCertifiedResultExitsFourAndUncertifiedThree) {
   EXPECT_EQ(a.code, 3) << a.out;
   EXPECT_NE(a.out.find("NOT CERTIFIED"), std::string::npos) << a.out;
   for (const auto& f : {wrong, json, ambiguous}) fs::remove(f);
+}
+
+TEST(RunReportApp, NoResultIsNotCertifiedAndJudgesNothing) {
+  const std::string log = write_log("none", 0);
+  const std::string json = log + ".json", png = log + ".png";
+  const Ran r = run_report("--log " + log + " --json " + json + " --png " + png);
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("NOT CERTIFIED: no result on FACT_RESULT_<id>"), std::string::npos) << r.out;
+  const auto j = read_json(json);
+  EXPECT_FALSE(j["certified"].get<bool>());
+  EXPECT_EQ(j["status"], "no_result");
+  EXPECT_EQ(j["exit_code"], 3);
+  EXPECT_TRUE(j["drones"].empty());
+  EXPECT_NEAR(j["sim_duration_s"].get<double>(), 10.0, 1e-9);
+  EXPECT_GT(fs::file_size(png), 5000u);  // the true trajectories are still drawn
+  for (const auto& f : {log, json, png}) fs::remove(f);
 }
 
 TEST(RunReportApp, BadInputExitsTwoWithTheReason) {

@@ -10,6 +10,7 @@
 // Prints one table row per drone. Exit codes: 0 everything matches; 1 something differs (the row
 // says what); 2 bad flags, an unreadable log, or no result in the original.
 #include "common/app.h"
+#include "common/log_reader.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -46,36 +47,28 @@ std::string decision(const std::string& state) {
 
 bool read_log(const std::string& path, const std::string& result_prefix, const std::string& status_channel,
               std::map<int, DroneTrace>* out) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) {
-    std::cerr << kApp << ": error: cannot read the LCM log " << path << "\n";
-    return false;
-  }
-  int64_t undecodable = 0;
-  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-    if (e->channel.rfind(result_prefix, 0) == 0) {
+  fact::app::LogDecoder dec(kApp);
+  const std::string why = fact::app::for_each_log_event(path, [&](const lcm::LogEvent& e) {
+    if (e.channel.rfind(result_prefix, 0) == 0) {
       fact::swarm_result_t m;
-      const std::string err = fact::app::decode_error(e->data, e->datalen, &m);
-      if (!err.empty()) {
-        if (undecodable++ < 3) std::cerr << kApp << ": " << path << ": event " << e->eventnum << " on " << e->channel << ": " << err << "\n";
-        continue;
-      }
+      if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
-      t.result_bytes.emplace_back(static_cast<const char*>(e->data), static_cast<size_t>(e->datalen));
+      t.result_bytes.emplace_back(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
       t.by_utime[m.utime] = t.result_bytes.back();
       t.last_status = m.status;
       t.last_reason = m.reason;
       t.last_rounds = m.rounds_used;
-    } else if (e->channel == status_channel) {
+    } else if (e.channel == status_channel) {
       fact::app_status_t m;
-      if (!fact::app::decode_error(e->data, e->datalen, &m).empty() || m.app != "fact-planner") continue;
+      if (!dec.decode(e, &m) || m.app != "fact-planner") return;
       DroneTrace& t = (*out)[m.drone_id];
       const std::string d = decision(m.state);
       if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
       if (!d.empty()) t.planner_final = m.state;
     }
-  }
-  return true;
+  });
+  if (!why.empty()) std::cerr << kApp << ": error: " << why << "\n";
+  return why.empty();
 }
 
 std::string join(const std::vector<std::string>& v) {

@@ -9,6 +9,7 @@
 // certified; 4 certified but outside the bounds or the drones disagree (certified-wrong);
 // 2 bad flags, an unreadable log, no truth or no result.
 #include "common/app.h"
+#include "common/log_reader.h"
 #include "evaluate.h"
 #include "fact/odometry_t.hpp"
 #include "fact/sim_clock_t.hpp"
@@ -63,20 +64,10 @@ struct RunLog {
   std::map<int, std::vector<TimedResult>> results;           // publishing drone → its results
   std::optional<fact::swarm_rounds_t> rounds;                // the newest complete rounds seen
   int64_t first_clock = -1, last_clock = -1;                 // sim µs
-  std::map<std::string, int> undecodable;                    // channel → count
-  int64_t events = 0;
+  std::map<std::string, int> undecodable;                    // channel (or "<channel> (NaN)") → count
 };
 
 bool starts_with(const std::string& s, const std::string& p) { return s.rfind(p, 0) == 0; }
-
-template <class T>
-bool decode(const lcm::LogEvent* e, T* m, RunLog* run) {
-  const std::string err = fact::app::decode_error(e->data, e->datalen, m);
-  if (err.empty()) return true;
-  if (run->undecodable[e->channel]++ < 3)
-    std::cerr << kApp << ": undecodable message on " << e->channel << " (event " << e->eventnum << "): " << err << "\n";
-  return false;
-}
 
 bool finite_truth(const fact::truth_t& t) {
   for (int k = 0; k < t.num_drones; ++k) {
@@ -89,44 +80,36 @@ bool finite_truth(const fact::truth_t& t) {
 
 // Reads the log; false (with the reason) when it cannot be read at all.
 bool read_log(const Options& o, RunLog* run, std::string* why) {
-  lcm::LogFile log(o.log, "r");
-  if (!log.good()) {
-    *why = "cannot read the LCM log " + o.log;
-    return false;
-  }
+  fact::app::LogDecoder dec(kApp);
   int64_t clock = -1;
-  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent()) {
-    ++run->events;
-    const std::string& ch = e->channel;
+  *why = fact::app::for_each_log_event(o.log, [&](const lcm::LogEvent& e) {
+    const std::string& ch = e.channel;
     if (ch == o.clock_channel) {
       fact::sim_clock_t m;
-      if (decode(e, &m, run)) {
+      if (dec.decode(e, &m)) {
         clock = m.utime;
         if (run->first_clock < 0) run->first_clock = m.utime;
         run->last_clock = m.utime;
       }
     } else if (ch == o.truth_channel) {
       fact::truth_t m;
-      if (decode(e, &m, run)) {
+      if (dec.decode(e, &m)) {
         if (finite_truth(m)) run->truth.push_back(m);
-        else if (run->undecodable[ch + " (NaN)"]++ == 0) std::cerr << kApp << ": truth with a NaN field ignored\n";
+        else dec.reject(ch + " (NaN)", "truth with a NaN field ignored");
       }
     } else if (starts_with(ch, o.vio_channel + "_")) {
       fact::odometry_t m;
-      if (decode(e, &m, run)) run->vio[m.drone_id].push_back(m);
+      if (dec.decode(e, &m)) run->vio[m.drone_id].push_back(m);
     } else if (starts_with(ch, o.result_channel + "_")) {
       fact::swarm_result_t m;
-      if (decode(e, &m, run)) run->results[m.drone_id].push_back({m, clock >= 0 ? clock : m.utime});
+      if (dec.decode(e, &m)) run->results[m.drone_id].push_back({m, clock >= 0 ? clock : m.utime});
     } else if (starts_with(ch, o.rounds_channel + "_")) {
       fact::swarm_rounds_t m;
-      if (decode(e, &m, run) && (!run->rounds || m.complete_rounds >= run->rounds->complete_rounds)) run->rounds = m;
+      if (dec.decode(e, &m) && (!run->rounds || m.complete_rounds >= run->rounds->complete_rounds)) run->rounds = m;
     }
-  }
-  if (run->events == 0) {
-    *why = "the LCM log " + o.log + " holds no events (empty or not an LCM log)";
-    return false;
-  }
-  return true;
+  });
+  run->undecodable = dec.undecodable();
+  return why->empty();
 }
 
 // The VIO sample of drone `id` nearest to time t (nullptr if none within 50 ms).
@@ -312,6 +295,37 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
   return buf;
 }
 
+// A figure that was not judged (no drone to judge) is null in the JSON, never a zero.
+nlohmann::json judged(int drones, double value) { return drones > 0 ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+// The run published no result at all: not certified (exit 3). The JSON says so, and the picture
+// shows the true trajectories only.
+int report_no_result(const Options& o, const RunLog& run, const fact::sim::World& world) {
+  const std::string verdict = "NOT CERTIFIED: no result on " + o.result_channel + "_<id> in the log";
+  std::printf("== %s\n", verdict.c_str());
+  if (!o.json.empty()) {
+    nlohmann::json j;
+    j["format"] = "fact-run-report-v1";
+    j["certified"] = false;
+    j["correct"] = false;
+    j["exit_code"] = 3;
+    j["verdict"] = verdict;
+    j["status"] = "no_result";
+    j["drones_with_results"] = 0;
+    j["time_to_certified_s"] = nullptr;
+    j["sim_duration_s"] = run.last_clock >= 0 && run.first_clock >= 0 ? nlohmann::json((run.last_clock - run.first_clock) * 1e-6)
+                                                                      : nlohmann::json(nullptr);
+    j["drones"] = nlohmann::json::array();
+    j["undecodable"] = run.undecodable;
+    std::ofstream(o.json) << j.dump(2) << "\n";
+  }
+  if (!o.png.empty() && !write_png(o.png, world, run, {}, nullptr, {}, "no result")) {
+    std::cerr << kApp << ": error: cannot write the picture " << o.png << "\n";
+    return 2;
+  }
+  return 3;
+}
+
 int run_report(const Options& o) {
   RunLog run;
   std::string why;
@@ -323,10 +337,6 @@ int run_report(const Options& o) {
     std::cerr << kApp << ": error: no ground truth on " << o.truth_channel << " in " << o.log << "\n";
     return 2;
   }
-  if (run.results.empty()) {
-    std::cerr << kApp << ": error: no result on " << o.result_channel << "_<id> in " << o.log << "\n";
-    return 2;
-  }
   fact::sim::World world = fact::sim::default_world(4, 1);
   if (!o.world.empty()) {
     try {
@@ -336,6 +346,7 @@ int run_report(const Options& o) {
       return 2;
     }
   }
+  if (run.results.empty()) return report_no_result(o, run, world);
   // Each drone's first certified result, else its last. Every drone's solver gets the same
   // complete rounds and publishes the same bytes, so the run is certified when a drone published a
   // certified result (the log may have missed another drone's copy under load) and no two
@@ -425,10 +436,14 @@ int run_report(const Options& o) {
                 e.truth.yaw, e.yaw_error, e.yaw_error * 180 / M_PI, e.estimate.origin.x(), e.estimate.origin.y(),
                 e.estimate.origin.z(), e.truth.origin.x(), e.truth.origin.y(), e.truth.origin.z(), e.position_error);
   }
-  std::printf("   yaw MAE %.4f rad (max %.4f), position error median %.3f m (max %.3f) over the %d non-reference drones\n",
-              sum.yaw_mae, sum.yaw_max, sum.position_median, sum.position_max, sum.drones);
-  std::printf("   against the frames at the result's time only: yaw MAE %.4f rad, position median %.3f m\n", sum_now.yaw_mae,
-              sum_now.position_median);
+  if (sum.drones == 0) {
+    std::printf("   no non-reference drone resolved: errors not judged\n");
+  } else {
+    std::printf("   yaw MAE %.4f rad (max %.4f), position error median %.3f m (max %.3f) over the %d non-reference drones\n",
+                sum.yaw_mae, sum.yaw_max, sum.position_median, sum.position_max, sum.drones);
+    std::printf("   against the frames at the result's time only: yaw MAE %.4f rad, position median %.3f m\n", sum_now.yaw_mae,
+                sum_now.position_median);
+  }
   std::printf("   mutual-observation edges: %zu; simulated time %.1f s\n", edges.size(), sim_duration);
   std::printf("== %s\n", verdict.c_str());
 
@@ -448,12 +463,15 @@ int run_report(const Options& o) {
     j["rounds_used"] = res.rounds_used;
     j["time_to_certified_s"] = certified ? nlohmann::json(time_to_result) : nlohmann::json(nullptr);
     j["sim_duration_s"] = sim_duration;
-    j["yaw_mae_rad"] = sum.yaw_mae;
-    j["yaw_max_rad"] = sum.yaw_max;
-    j["position_median_m"] = sum.position_median;
-    j["position_max_m"] = sum.position_max;
-    j["at_result"] = {{"yaw_mae_rad", sum_now.yaw_mae}, {"yaw_max_rad", sum_now.yaw_max},
-                      {"position_median_m", sum_now.position_median}, {"position_max_m", sum_now.position_max}};
+    j["drones_judged"] = sum.drones;
+    j["yaw_mae_rad"] = judged(sum.drones, sum.yaw_mae);
+    j["yaw_max_rad"] = judged(sum.drones, sum.yaw_max);
+    j["position_median_m"] = judged(sum.drones, sum.position_median);
+    j["position_max_m"] = judged(sum.drones, sum.position_max);
+    j["at_result"] = {{"yaw_mae_rad", judged(sum_now.drones, sum_now.yaw_mae)},
+                      {"yaw_max_rad", judged(sum_now.drones, sum_now.yaw_max)},
+                      {"position_median_m", judged(sum_now.drones, sum_now.position_median)},
+                      {"position_max_m", judged(sum_now.drones, sum_now.position_max)}};
     j["mutual_edges"] = edges;
     for (const auto& e : errors)
       j["drones"].push_back({{"id", e.id},
@@ -495,8 +513,8 @@ int main(int argc, char** argv) {
   cli.add_option("--rounds-channel", o.rounds_channel, "Complete-rounds channel base (+ _<id>)")->capture_default_str();
   cli.add_option("--clock-channel", o.clock_channel)->capture_default_str();
   cli.footer("Exit codes: 0 certified, the drones agree and every frame within the bounds; 3 not certified;\n"
-             "4 certified but outside the bounds or the drones disagree; 2 bad flags, unreadable log, no truth\n"
-             "or no result.");
+             "4 certified but outside the bounds or the drones disagree; 2 bad flags, unreadable log or no truth.\n"
+             "A log with no result at all is not certified (3).");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
