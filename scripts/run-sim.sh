@@ -14,8 +14,10 @@
 # results, setpoints, FC state, truth, clock, status; frames stay on the per-drone camera groups),
 # run.png (top-down picture), report.json (fact-run-report-v1), cpu.csv (CPU per app per drone),
 # logs/<app>-<id>.log. Exit codes: 0 certified and within the error bounds; 3 not certified
-# (no certified result within --max-sim-time, or a planner gave up); 4 certified but outside the
-# bounds (certified-wrong); 1 a process failed; 2 bad flags; 125 no private network namespace.
+# (no certified result, or no result at all, within --max-sim-time, or a planner gave up); 4
+# certified but outside the bounds (certified-wrong); 1 a process failed (an app or the simulator
+# exited early, or the log could not be judged); 2 bad flags or world; 125 no private network
+# namespace.
 set -euo pipefail
 [ -n "${FACT_RUN_SIM_TRACE:-}" ] && set -x  # FACT_RUN_SIM_TRACE=1: trace the script
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -28,8 +30,11 @@ Flags:
   --world FILE        fact-world-v1 world (default: apps/fact_sim/worlds/default.json)
   --seed S            seed of the simulator and the planners (default 1)
   --realtime          simulated time runs at wall-clock speed (default)
-  --fast              as fast as the machine allows (at most --fast-rate x real time); every
-                      frame waits for the detectors (fact-sim --lockstep) so nothing is dropped
+  --fast              as fast as the machine allows (at most --fast-rate x real time); each
+                      frame waits until every detector has answered the previous one (fact-sim
+                      --lockstep, a silent detector is timed out), so a loaded machine slows the
+                      run down instead of changing what the detectors see. --realtime does not
+                      wait: a detector that falls behind misses frames, as on a real drone
   --fast-rate X       cap of --fast (default 4: faster multiplies the bus traffic per wall
                       second, and a loaded machine then drops UDP)
   --out DIR           output folder (default build/run-sim)
@@ -80,7 +85,8 @@ is_uint() { [[ "$1" =~ ^[0-9]+$ ]]; }
 is_num() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]]; }
 [ -z "$drones" ] || { is_uint "$drones" && [ "$drones" -ge 2 ] && [ "$drones" -le 32 ]; } ||
   die_usage "--drones: expected an integer 2..32, got '$drones'"
-is_uint "$seed" || die_usage "--seed: expected a non-negative integer, got '$seed'"
+is_uint "$seed" && [ "${#seed}" -le 9 ] || die_usage "--seed: expected an integer 0..999999999, got '$seed'"
+seed=$((10#$seed))  # decimal even with leading zeros ("08" is not octal here)
 for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_rate" \
             "yaw-bound:$yaw_bound" "position-bound:$position_bound" "spin-rate:$spin_rate" "max-rounds:$max_rounds"; do
   is_num "${pair#*:}" && awk -v v="${pair#*:}" 'BEGIN { exit !(v > 0) }' ||
@@ -134,6 +140,17 @@ if [ -z "${FACT_RUN_SIM_INNER:-}" ]; then
 fi
 
 # ---------------------------------------------------------------- inside the private namespace
+# FACT_RUN_SIM_INNER is this script's own marker for its second pass; were it set by hand, the apps
+# would talk udpm on the machine's real interfaces. So check that this namespace is private: it
+# must have no interface but lo yet (/proc/net/dev lists this namespace's interfaces; /sys/class/net
+# may still show the host's).
+case "$FACT_RUN_SIM_INNER" in netns|shared) ;; *) echo "run-sim: FACT_RUN_SIM_INNER='$FACT_RUN_SIM_INNER' is internal (netns or shared)" >&2; exit 125 ;; esac
+foreign=$(awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") printf "%s ", $1 }' /proc/net/dev)
+if [ -n "$foreign" ]; then
+  echo "run-sim: FACT_RUN_SIM_INNER is set but this is not a private network namespace (interfaces: $foreign);" >&2
+  echo "  refusing to send multicast here. Unset it: run-sim.sh makes its own namespace." >&2
+  exit 125
+fi
 B="$FACT_RUN_SIM_BUILD"
 bin_sim="$B/apps/fact_sim/fact-sim" bin_det="$B/apps/fact_detector/fact-detector" bin_vio="$B/apps/fact-vio-relay"
 bin_gos="$B/apps/fact-gossip" bin_sol="$B/apps/fact-solver" bin_pla="$B/apps/fact_planner/fact-planner"
@@ -156,18 +173,19 @@ BUS='udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152'
 # drone's apps never receive another drone's frames, even when the drones share a namespace.
 FRAMES='udpm://239.255.77.{id}:{7700+id}?ttl=1&recv_buf_size=8388608'
 frames_url() { local u=${FRAMES//\{id\}/$1}; echo "${u//\{7700+id\}/$((7700 + $1))}"; }
-MAV_BASE=14600
+MAV_BASE=14600     # the simulated flight controllers listen on MAV_BASE + id (ids 0..255)
+BRIDGE_BASE=14300  # each fact-fc-bridge binds BRIDGE_BASE + id: never one of the simulator's ports
 prefix="fact-run-$$"
 sim_addr=127.0.0.1
 rm -rf "$out/logs"
 mkdir -p "$out/logs"
 rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-params.txt"
 
-pids=() names=()
+pids=() names=() logger_pid=""
 cleanup() {
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}" $logger_pid; do kill -TERM "$pid" 2>/dev/null || true; done
   sleep 0.3
-  for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}" $logger_pid; do kill -KILL "$pid" 2>/dev/null || true; done
   if [ "$FACT_RUN_SIM_INNER" = netns ]; then
     for id in $ids; do ip netns del "$prefix-$id" 2>/dev/null || true; done
     ip link del fact-br0 2>/dev/null || true
@@ -233,31 +251,35 @@ for id in $ids; do
   start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}"
   start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(frames_url "$id")" --seed "$((seed * 100 + id))" \
     --spin-rate "$spin_rate" --max-rounds "$max_rounds"
-  start "fact-fc-bridge-$id" "$id" "$bin_fcb" "${c[@]}" --udp "$((14540 + id)):$sim_addr:$((MAV_BASE + id))" --arm --offboard
+  start "fact-fc-bridge-$id" "$id" "$bin_fcb" "${c[@]}" --udp "$((BRIDGE_BASE + id)):$sim_addr:$((MAV_BASE + id))" --arm --offboard
 done
 
 rate=1
 [ "$mode" = fast ] && rate=$fast_rate
 sim_flags=(--world "$world" ${drones:+--drones "$drones"} --seed "$seed" --rate "$rate" --duration "$max_sim"
            --resolution "$resolution" --camera-rate "$camera_rate" --lcm-url "$BUS" --frames-url "$FRAMES"
-           --mavlink-port "$MAV_BASE" --mavlink-bind "$sim_addr" --lockstep)
+           --mavlink-port "$MAV_BASE" --mavlink-bind "$sim_addr")
+[ "$mode" = fast ] && sim_flags+=(--lockstep)
 sleep 0.5  # let every app subscribe before the clock starts
 start fact-sim -1 "$bin_sim" "${sim_flags[@]}"
 sim_pid=$!
 wall0=$(date +%s.%N)
 echo "== $n drones (${ids// /,}), world $(basename "$world"), seed $seed, $mode (sim rate ${rate}x at most), $resolution at $camera_rate Hz; logs in $out/logs"
 
-# Live: one line per event from every app's log.
+# Live: one line per event from every app's log. $! is tail itself, so stopping it ends the
+# filter behind it too.
 if [ "$quiet" = 0 ]; then
-  (cd "$out/logs" && exec tail --pid=$$ -q -n +1 -F fact-*.log 2>/dev/null |
+  cd "$out/logs"
+  tail --pid=$$ -q -n +1 -F fact-*.log 2>/dev/null > >(
     grep --line-buffered -E "state: |own round [0-9]+ closed|estimate: |error|failsafe|lockstep:|exit:|sim t = [0-9]+0\.0 s|took off|armed|OFFBOARD" |
     sed -u -E 's/^[0-9T:.-]+Z //') &
   pids+=("$!")
   names+=("live")
+  cd - >/dev/null
 fi
 
-# running PID: the process exists and has not exited (an exited child stays a zombie until waited
-# for, and kill -0 still succeeds on it).
+# running PID: the process has not exited. (Bash reaps its children as they exit, so an exited
+# app's /proc entry is gone; the stat check also covers a zombie that was not reaped yet.)
 running() {
   local st
   st=$(cut -d' ' -f3 "/proc/$1/stat" 2>/dev/null) || return 1
@@ -266,13 +288,23 @@ running() {
 
 # Wait until every planner is done (holding a certified result, or giving up at --max-rounds), the
 # simulator runs out of time, or a process dies. The apps keep running until their CPU is read.
-verdict=""
+verdict="" failed=0
 while :; do
-  if ! running "$sim_pid"; then verdict="the simulator ended (--max-sim-time $max_sim s reached?)"; break; fi
+  if ! running "$sim_pid"; then
+    sim_rc=0
+    wait "$sim_pid" || sim_rc=$?
+    if [ "$sim_rc" -eq 0 ]; then
+      verdict="the simulator reached --max-sim-time ($max_sim s)"
+    else
+      verdict="fact-sim failed (exit $sim_rc; see $out/logs/fact-sim.log)"
+      failed=1
+    fi
+    break
+  fi
   done_count=0
   for i in "${!pids[@]}"; do
     [ "${names[$i]}" = live ] && continue
-    running "${pids[$i]}" || { verdict="${names[$i]} exited early (see $out/logs/${names[$i]}.log)"; break 2; }
+    running "${pids[$i]}" || { verdict="${names[$i]} exited early (see $out/logs/${names[$i]}.log)"; failed=1; break 2; }
   done
   for id in $ids; do grep -a -q "state: done" "$out/logs/fact-planner-$id.log" && done_count=$((done_count + 1)); done
   [ "$done_count" -eq "$n" ] && { verdict="every planner is done"; break; }
@@ -283,19 +315,21 @@ done
 [ "$verdict" = "every planner is done" ] && sleep "$(awk -v r="$rate" 'BEGIN { printf "%.2f", 8 / r }')"
 wall1=$(date +%s.%N)
 
-# CPU per app per drone, read from /proc before anything is stopped or reaped (an exited planner
-# is a zombie until waited for, and its stat still holds its CPU time).
+# CPU per app per drone, read from /proc before anything is stopped. An app that exited early has
+# no /proc entry left: its row says so (empty figures) rather than going missing.
 hz=$(getconf CLK_TCK)
 wall_s=$(awk -v a="$wall0" -v b="$wall1" 'BEGIN { printf "%.3f", b - a }')
 echo "app,drone,cpu_s,wall_s,cpu_percent" >"$out/cpu.csv"
 for i in "${!pids[@]}"; do
   name=${names[$i]} pid=${pids[$i]}
   [ "$name" = live ] && continue
-  [ -r "/proc/$pid/stat" ] || continue
-  read -r -a st <"/proc/$pid/stat" || continue
-  ticks=$((st[13] + st[14]))
   app=${name%-*} id=${name##*-}
   [ "$name" = fact-sim ] && { app=fact-sim; id=-1; }
+  if ! running "$pid" || ! read -r -a st <"/proc/$pid/stat"; then
+    echo "$app,$id,,$wall_s," >>"$out/cpu.csv"
+    continue
+  fi
+  ticks=$((st[13] + st[14]))
   awk -v a="$app" -v i="$id" -v t="$ticks" -v hz="$hz" -v w="$wall_s" \
     'BEGIN { printf "%s,%s,%.3f,%.3f,%.2f\n", a, i, t / hz, w, 100 * t / hz / w }' >>"$out/cpu.csv"
 done
@@ -323,10 +357,21 @@ for id in $ids; do
 done
 [ -n "$planner_codes" ] && printf '%s' "$planner_codes" | cut -c1-200
 
+# The verdict: fact-run-report's 0 (certified and correct), 3 (not certified, or no result) or 4
+# (certified-wrong); a log it cannot judge (its 2) is a failed run here (1), as is an app or the
+# simulator that exited early, whatever the log holds.
 rc=0
 "$bin_rep" --log "$out/run.lcm" --world "$world" --png "$out/run.png" --json "$out/report.json" \
   --yaw-bound "$yaw_bound" --position-bound "$position_bound" || rc=$?
 echo "== files: $out/run.lcm (LCM log; replay it with scripts/replay.sh $out/run.lcm), $out/run.png (picture),"
 echo "   $out/report.json, $out/cpu.csv, $out/run-params.txt, $out/logs/"
-if [ "$rc" -eq 0 ]; then echo "== certified and correct"; fi
+if [ "$failed" = 1 ]; then
+  echo "== FAILED: $verdict" >&2
+  exit 1
+fi
+case "$rc" in
+  0) echo "== certified and correct" ;;
+  3|4) ;;
+  *) echo "== FAILED: fact-run-report could not judge the run (exit $rc)" >&2; exit 1 ;;
+esac
 exit "$rc"

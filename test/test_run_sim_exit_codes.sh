@@ -1,0 +1,72 @@
+#!/bin/bash
+# scripts/run-sim.sh's exit codes on runs that do not end certified, each checked on a real run of
+# 2 drones on the small world (--fast, private namespaces as always):
+#   - a run too short for any result: 3 (not certified), report.json says no result;
+#   - an app killed during the run: 1, naming the app;
+#   - its internal FACT_RUN_SIM_INNER marker set by hand outside a private namespace: 125, and no
+#     app is started (multicast would otherwise reach the machine's interfaces);
+#   - a seed with a leading zero is decimal ("08"), not a bad octal number.
+#
+#   test/test_run_sim_exit_codes.sh REPO BUILD_DIR OUT_DIR
+#
+# Exit 77 (skipped) when no private network namespace can be made here.
+set -u
+if [ "$#" -ne 3 ]; then
+  echo "usage: $0 REPO BUILD_DIR OUT_DIR" >&2
+  exit 2
+fi
+REPO=$1 BUILD=$2 OUT=$3
+rm -rf "$OUT"
+mkdir -p "$OUT"
+fail() {
+  echo "test_run_sim_exit_codes: $*" >&2
+  exit 1
+}
+run_sim() {  # run_sim NAME FLAGS...: run-sim.sh into $OUT/NAME, output in $OUT/NAME.out
+  local name=$1
+  shift
+  BUILD_DIR="$BUILD" "$REPO/scripts/run-sim.sh" --no-build --quiet --fast --drones 2 \
+    --world "$REPO/apps/fact_sim/worlds/small.json" --out "$OUT/$name" "$@" >"$OUT/$name.out" 2>&1
+}
+
+# 1. Too short for a result: not certified (3), and the report says why.
+rc=0
+run_sim short --seed 08 --max-sim-time 3 || rc=$?
+[ "$rc" -eq 125 ] && { echo "test_run_sim_exit_codes: no private network namespace here: skipped" >&2; exit 77; }
+[ "$rc" -eq 3 ] || { cat "$OUT/short.out"; fail "a 3 s run exited $rc, expected 3 (not certified)"; }
+grep -q '"status": "no_result"' "$OUT/short/report.json" || fail "report.json does not say no_result"
+grep -q '"certified": false' "$OUT/short/report.json" || fail "report.json does not say certified false"
+grep -q "^seed=8$" "$OUT/short/run-params.txt" || fail "--seed 08 was not read as 8: $(cat "$OUT/short/run-params.txt")"
+grep -q "reached --max-sim-time" "$OUT/short.out" || fail "the 3 s run does not say it reached --max-sim-time"
+
+# 2. An app killed during the run: 1, naming it. The solver of drone 1 is found by its log file,
+# which only that process holds open.
+run_sim killed --max-sim-time 60 &
+sim=$!
+log="$OUT/killed/logs/fact-solver-1.log"
+victim=""
+for _ in $(seq 100); do
+  [ -s "$log" ] && victim=$(for fd in /proc/[0-9]*/fd/1; do
+    [ "$(readlink "$fd" 2>/dev/null)" = "$log" ] && { p=${fd#/proc/}; echo "${p%%/*}"; }
+  done | head -n 1)
+  [ -n "$victim" ] && break
+  sleep 0.2
+done
+[ -n "$victim" ] || { kill "$sim"; fail "no process writes $log"; }
+[ "$(cat "/proc/$victim/comm")" = fact-solver ] || fail "pid $victim writing $log is $(cat "/proc/$victim/comm")"
+kill -KILL "$victim"
+rc=0
+wait "$sim" || rc=$?
+[ "$rc" -eq 1 ] || { cat "$OUT/killed.out"; fail "a run whose solver was killed exited $rc, expected 1"; }
+grep -q "FAILED: fact-solver-1 exited early" "$OUT/killed.out" || { cat "$OUT/killed.out"; fail "the failure does not name fact-solver-1"; }
+
+# 3. The internal marker outside a private namespace (only checkable where this machine has an
+# interface besides lo, as every real machine has).
+if awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") found = 1 } END { exit !found }' /proc/net/dev; then
+  rc=0
+  FACT_RUN_SIM_INNER=shared FACT_RUN_SIM_BUILD="$BUILD" run_sim marker --max-sim-time 3 || rc=$?
+  [ "$rc" -eq 125 ] || { cat "$OUT/marker.out"; fail "FACT_RUN_SIM_INNER outside a namespace exited $rc, expected 125"; }
+  grep -q "not a private network namespace" "$OUT/marker.out" || fail "the refusal does not say why"
+  [ ! -e "$OUT/marker/logs" ] || fail "apps were started outside a private namespace"
+fi
+echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125, seed 08 read as 8"
