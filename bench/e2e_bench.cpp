@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -219,9 +220,17 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const int total = static_cast<int>(o.drones.size()) * o.seeds;
   int done = 0;
+  bool interrupted = false;
   for (int n : o.drones) {
-    for (int s = o.first_seed; s < o.first_seed + o.seeds; ++s) {
+    for (int s = o.first_seed; s < o.first_seed + o.seeds && !interrupted; ++s) {
       const Run r = run_one(o, n, s);
+      // std::system ignores SIGINT in this process while run-sim.sh runs, so a Ctrl-C reaches only
+      // the run, which exits 130 (or dies of it): stop here and summarise the runs that finished.
+      if (r.exit_code == 128 + SIGINT) {
+        std::printf("[%d/%d] N=%d seed %d: interrupted; summarising the %d finished runs\n", done + 1, total, n, s, done);
+        interrupted = true;
+        break;
+      }
       write_run_row(runs_csv, r);
       runs_csv.flush();
       by_size[n].push_back(r);

@@ -325,8 +325,8 @@ class Simulator {
       std::string value;
       if (key == "id") {
         value = std::to_string(id);
-      } else if (key.size() > 3 && key.compare(key.size() - 3, 3, "+id") == 0 &&
-                 key.find_first_not_of("0123456789") == key.size() - 3) {
+      } else if (key.size() > 3 && key.size() <= 9 && key.compare(key.size() - 3, 3, "+id") == 0 &&
+                 key.find_first_not_of("0123456789") == key.size() - 3) {  // B of at most 6 digits
         value = std::to_string(std::stol(key.substr(0, key.size() - 3)) + id);
       } else {
         ++at;
