@@ -5,21 +5,10 @@
 # Extra arguments go to fact-bench-detector (try --help, --quick, --episodes N, --seed S).
 # BUILD_DIR=... builds elsewhere (default: build/).
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${BUILD_DIR:-$here/build}"
-"$here/scripts/install-deps.sh"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$(nproc)" --target fact-bench-detector
+source "$(dirname "${BASH_SOURCE[0]}")/lib/bench.sh"
+bench_build fact-bench-detector
 cd "$here"
-out_dir="bench/results"
-args=("$@")
-for ((i = 0; i < ${#args[@]}; ++i)); do
-  case "${args[i]}" in
-    --help|-h) exec "$build/bench/fact-bench-detector" --help ;;
-    --out-dir) out_dir="${args[i + 1]:-$out_dir}" ;;
-    --out-dir=*) out_dir="${args[i]#--out-dir=}" ;;
-  esac
-done
+bench_args "$build/bench/fact-bench-detector" "$@"
 start=$(date +%s)
 # One core: the figures are per core (OpenCV's own threads off).
 OPENCV_FOR_THREADS_NUM=1 OMP_NUM_THREADS=1 taskset -c 0 "$build/bench/fact-bench-detector" "$@"

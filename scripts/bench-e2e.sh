@@ -5,22 +5,11 @@
 # bench/results/e2e.png (bench/plots/e2e.gp). Extra arguments go to fact-bench-e2e (try --help,
 # --drones 2,4 --seeds 5 for a quick look). BUILD_DIR=... builds elsewhere (default: build/).
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${BUILD_DIR:-$here/build}"
-"$here/scripts/install-deps.sh"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$(nproc)" --target fact-bench-e2e fact-sim fact-detector fact-vio-relay fact-gossip \
+source "$(dirname "${BASH_SOURCE[0]}")/lib/bench.sh"
+bench_build fact-bench-e2e fact-sim fact-detector fact-vio-relay fact-gossip \
   fact-solver fact-planner fact-fc-bridge fact-run-report
 cd "$here"
-out_dir="bench/results"
-args=("$@")
-for ((i = 0; i < ${#args[@]}; ++i)); do
-  case "${args[i]}" in
-    --help|-h) exec "$build/bench/fact-bench-e2e" --help ;;
-    --out-dir) out_dir="${args[i + 1]:-$out_dir}" ;;
-    --out-dir=*) out_dir="${args[i]#--out-dir=}" ;;
-  esac
-done
+bench_args "$build/bench/fact-bench-e2e" "$@"
 start=$(date +%s)
 "$build/bench/fact-bench-e2e" --repo "$here" --build "$build" "$@"
 echo "== plot"

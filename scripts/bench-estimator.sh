@@ -5,22 +5,10 @@
 # Extra arguments go to fact-bench-estimator (try --help, --quick, --scenarios S, --max-n N).
 # BUILD_DIR=... builds elsewhere (default: build/).
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${BUILD_DIR:-$here/build}"
-"$here/scripts/install-deps.sh"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$(nproc)" --target fact-bench-estimator
+source "$(dirname "${BASH_SOURCE[0]}")/lib/bench.sh"
+bench_build fact-bench-estimator
 cd "$here"
-# --out-dir given on the command line decides where the CSV files (and so the plots) go.
-out_dir="bench/results"
-args=("$@")
-for ((i = 0; i < ${#args[@]}; ++i)); do
-  case "${args[i]}" in
-    --help|-h) exec "$build/bench/fact-bench-estimator" --help ;;
-    --out-dir) out_dir="${args[i + 1]:-$out_dir}" ;;
-    --out-dir=*) out_dir="${args[i]#--out-dir=}" ;;
-  esac
-done
+bench_args "$build/bench/fact-bench-estimator" "$@"
 start=$(date +%s)
 OPENBLAS_NUM_THREADS=1 "$build/bench/fact-bench-estimator" "$@"
 echo "== plots"

@@ -7,17 +7,10 @@
 # Extra arguments go to fact-bench-planner (try --help, --quick, --episodes N, --seed S, --frames F).
 # BUILD_DIR=... builds elsewhere (default: build/).
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${BUILD_DIR:-$here/build}"
-"$here/scripts/install-deps.sh"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$(nproc)" --target fact-bench-planner
+source "$(dirname "${BASH_SOURCE[0]}")/lib/bench.sh"
+bench_build fact-bench-planner
 cd "$here"
-for arg in "$@"; do
-  case "$arg" in
-    --help|-h) exec "$build/bench/fact-bench-planner" --help ;;
-  esac
-done
+bench_args "$build/bench/fact-bench-planner" "$@"
 start=$(date +%s)
 # One core: the timing figures are per core.
 taskset -c 0 "$build/bench/fact-bench-planner" "$@"
