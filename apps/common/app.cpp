@@ -308,4 +308,10 @@ int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(
   return 0;
 }
 
+bool lcm_opened(const lcm::LCM& lcm, const std::string& url, const Log& log) {
+  if (lcm.good()) return true;
+  log.event("error: cannot open LCM" + (url.empty() ? std::string() : " at " + url));
+  return false;
+}
+
 }  // namespace fact::app

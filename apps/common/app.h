@@ -61,6 +61,10 @@ class Log {
   int drone_id_;
 };
 
+// True when lcm opened; else logs "error: cannot open LCM at <url>" (url "" = LCM's default) and
+// returns false.
+bool lcm_opened(const lcm::LCM& lcm, const std::string& url, const Log& log);
+
 // Heartbeat and counters of one app: fact::app_status_t on `channel` (FACT_STATUS by default),
 // about once per period. Counters appear in the order they were first counted.
 class Status {

@@ -1,6 +1,7 @@
 #include "common/flags.h"
 
 #include <cmath>
+#include <iostream>
 #include <sstream>
 
 namespace fact::app {
@@ -54,6 +55,20 @@ bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeou
   }
   log.event("error: no simulation clock tick on " + f.clock_channel + " within " + std::to_string(timeout_ms) + " ms");
   return false;
+}
+
+int parse_flags(CLI::App& cli, int argc, char** argv, const char* app, const std::function<void()>& check) {
+  try {
+    cli.parse(argc, argv);
+    check();
+    return -1;
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return cli.exit(e);  // --help
+    std::cerr << app << ": error: " << e.what() << " (see --help)\n";
+  } catch (const FlagError& e) {
+    std::cerr << app << ": error: " << e.what() << " (see --help)\n";
+  }
+  return 2;
 }
 
 }  // namespace fact::app

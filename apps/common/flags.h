@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -37,6 +38,11 @@ void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id);
 
 // Throws FlagError("<flag>: expected a finite number > 0, got <value>") unless value is.
 void check_positive(const char* flag, double value);
+
+// Parses the command line into cli, then runs check (which throws FlagError for an unusable
+// value). Returns -1 when the app should go on, else the code to exit with: 0 after --help, 2 after
+// a bad flag, with "<app>: error: <reason> (see --help)" on stderr.
+int parse_flags(CLI::App& cli, int argc, char** argv, const char* app, const std::function<void()>& check);
 
 // With --sim-clock: follows the simulation clock on --clock-channel and waits (up to timeout_ms,
 // logging that it waits) for its first tick; false, after logging why, when none came.

@@ -531,17 +531,7 @@ int main(int argc, char** argv) {
                kApp};
   add_flags(cli, options);
   cli.get_formatter()->column_width(34);
-  try {
-    cli.parse(argc, argv);
-    check(options);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return cli.exit(e);
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  } catch (const fact::app::FlagError& e) {
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  }
+  if (const int code = fact::app::parse_flags(cli, argc, argv, kApp, [&] { check(options); }); code >= 0) return code;
   const fact::app::Log log(kApp, options.common.drone_id);
   cv::setNumThreads(1);  // one core per detector: N drones' detectors share a machine in simulation
   std::unique_ptr<fact::YoloDetector> yolo;
@@ -561,10 +551,7 @@ int main(int argc, char** argv) {
     log.event("yolo model " + options.model + " loaded (" + std::to_string(yolo->num_classes()) + " classes)");
   }
   lcm::LCM lcm(options.common.lcm_url);
-  if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
-    return 1;
-  }
+  if (!fact::app::lcm_opened(lcm, options.common.lcm_url, log)) return 1;
   fact::app::install_stop_handler();
   App app(&lcm, options, std::move(yolo));
   if (!options.png_dir.empty()) return run_png_dir(app, options);

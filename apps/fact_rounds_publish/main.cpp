@@ -150,10 +150,7 @@ int run(const Options& o) {
 
   const fact::app::Log log(kApp, o.drone_id);
   lcm::LCM lcm(o.lcm_url);
-  if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (o.lcm_url.empty() ? std::string() : " at " + o.lcm_url));
-    return 1;
-  }
+  if (!fact::app::lcm_opened(lcm, o.lcm_url, log)) return 1;
   fact::app::install_stop_handler();
   for (int i = 0; (o.count == 0 || i < o.count) && !fact::app::stop_requested(); ++i) {
     if (i > 0) pause(o.interval);

@@ -720,10 +720,7 @@ int main(int argc, char** argv) {
   }
   fact::app::install_stop_handler();
   lcm::LCM lcm(o.lcm_url);
-  if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (o.lcm_url.empty() ? std::string() : " at " + o.lcm_url));
-    return 1;
-  }
+  if (!fact::app::lcm_opened(lcm, o.lcm_url, log)) return 1;
   fact::app::Status status(&lcm, o.status_channel, kApp, -1);
   log.event("start: seed " + std::to_string(o.seed) + fmt(", rate %g, duration %g s, camera %g Hz", o.rate, o.duration, o.camera_rate) +
             ", " + o.resolution + ", script " + o.script + ", epoch " + std::to_string(o.epoch_utime) + " us");

@@ -224,24 +224,11 @@ int main(int argc, char** argv) {
   add_flags(app, options);
   app.get_formatter()->column_width(34);
   fact::EstimateOptions estimate_options;
-  try {
-    app.parse(argc, argv);
-    estimate_options = check(options);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  } catch (const FlagError& e) {
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  }
+  if (const int code = fact::app::parse_flags(app, argc, argv, kApp, [&] { estimate_options = check(options); }); code >= 0) return code;
 
   const fact::app::Log log(kApp, options.common.drone_id);
   lcm::LCM lcm(options.common.lcm_url);
-  if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
-    return 1;
-  }
+  if (!fact::app::lcm_opened(lcm, options.common.lcm_url, log)) return 1;
   fact::app::install_stop_handler();
   if (!fact::app::start_clock(lcm, options.common, log)) return 1;
   Solver solver(lcm, options, estimate_options);

@@ -399,17 +399,7 @@ int main(int argc, char** argv) {
                kApp};
   add_flags(app, options);
   app.get_formatter()->column_width(34);
-  try {
-    app.parse(argc, argv);
-    check(app, options);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  } catch (const FlagError& e) {
-    std::cerr << kApp << ": error: " << e.what() << " (see --help)\n";
-    return 2;
-  }
+  if (const int code = fact::app::parse_flags(app, argc, argv, kApp, [&] { check(app, options); }); code >= 0) return code;
 
   const fact::app::Log log(kApp, options.common.drone_id);
   // The source first: a file that cannot be read is bad input (2), before any LCM traffic.
@@ -442,8 +432,7 @@ int main(int argc, char** argv) {
   }
 
   lcm::LCM lcm(options.common.lcm_url);
-  if (!lcm.good()) {
-    log.event("error: cannot open LCM" + (options.common.lcm_url.empty() ? std::string() : " at " + options.common.lcm_url));
+  if (!fact::app::lcm_opened(lcm, options.common.lcm_url, log)) {
     if (sock >= 0) close(sock);
     return 1;
   }
