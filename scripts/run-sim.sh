@@ -334,7 +334,6 @@ for i in "${!pids[@]}"; do
     'BEGIN { printf "%s,%s,%.3f,%.3f,%.2f\n", a, i, t / hz, w, 100 * t / hz / w }' >>"$out/cpu.csv"
 done
 
-cleanup_rc=0
 for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
 for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
 pids=()
