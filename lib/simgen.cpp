@@ -443,7 +443,12 @@ Observation Generator::report(int i, double heading, const Eigen::Vector3d& body
 
 // Three standard normal draws whatever the noise kind, so the kind does not change the rest.
 Eigen::Vector3d Generator::add_noise(const Eigen::Vector3d& v) {
-  const Eigen::Vector3d g(gauss(), gauss(), gauss());
+  // Named draws, in the order x86-64 took them (C++ leaves the order of constructor arguments
+  // unspecified; GCC on aarch64 took them the other way: see place_random).
+  const double g2 = gauss();
+  const double g1 = gauss();
+  const double g0 = gauss();
+  const Eigen::Vector3d g(g0, g1, g2);
   const double range = v.norm();
   if (o_.noise == NoiseKind::paper) return v + o_.paper_sigma * range * g;
   if (o_.noise == NoiseKind::none) return v;

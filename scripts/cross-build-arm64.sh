@@ -4,6 +4,7 @@
 #   scripts/cross-build-arm64.sh                       everything below, in ./build-arm64
 #   BUILD_DIR=/tmp/b JOBS=2 scripts/cross-build-arm64.sh
 #   CTEST_ARGS="-R Gossip" scripts/cross-build-arm64.sh  extra ctest arguments
+#   FACT_TEST_TIME_SCALE=20 scripts/cross-build-arm64.sh   test deadlines and timeouts x20 (default 10)
 #   HOST_BUILD_DIR=build scripts/cross-build-arm64.sh    x86-64 reference tools from ./build
 #   scripts/cross-build-arm64.sh --no-tests            sysroot + cross build + stripped binaries only
 # Phases (each timed; the summary at the end prints the results):
@@ -18,7 +19,9 @@
 #   4. cross build (BUILD_DIR/aarch64): every app, test and benchmark, with
 #      cmake/toolchains/aarch64-linux-gnu.cmake and the host's lcm-gen
 #   5. ctest: every test under qemu-aarch64 -L BUILD_DIR/sysroot (CMAKE_CROSSCOMPILING_EMULATOR;
-#      no binfmt handler needed), udpm tests in private network namespaces as natively
+#      no binfmt handler needed), udpm tests in private network namespaces as natively. qemu runs
+#      the code far slower than the host, so the tests' waiting deadlines and ctest timeouts are
+#      multiplied by FACT_TEST_TIME_SCALE (default 10 here; test/time_scale.cmake)
 #   6. fact-solve arm64 vs x86-64 on the same rounds files: equal to 1e-9 (test/arm64/compare-solve.sh)
 #   7. an arm64 and an x86-64 fact-gossip exchange a round over udpm:// in a private network
 #      namespace (test/arm64/gossip-exchange.sh)
@@ -31,6 +34,7 @@ jobs="${JOBS:-$(nproc)}"
 mirror="${FACT_DEBIAN_MIRROR:-http://deb.debian.org/debian}"
 security_mirror="${FACT_DEBIAN_SECURITY_MIRROR:-http://deb.debian.org/debian-security}"
 run_tests=1
+time_scale="${FACT_TEST_TIME_SCALE:-10}"
 case "${1:-}" in
   "") ;;
   --no-tests) run_tests=0 ;;
@@ -130,7 +134,7 @@ jar_args=()
 [ -f /usr/share/java/lcm.jar ] && jar_args=(-DLCM_JAR=/usr/share/java/lcm.jar)
 log "$build/aarch64.configure.log" cmake -S "$here" -B "$cross_build" -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_TOOLCHAIN_FILE="$here/cmake/toolchains/aarch64-linux-gnu.cmake" -DFACT_ARM64_SYSROOT="$sysroot" \
-  "${jar_args[@]}"
+  -DFACT_TEST_TIME_SCALE="$time_scale" "${jar_args[@]}"
 echo "== build ($cross_build, log: $build/aarch64.build.log)"
 log "$build/aarch64.build.log" cmake --build "$cross_build" -j "$jobs"
 end
@@ -144,12 +148,13 @@ status=0
 if ((run_tests)); then
   begin "ctest under qemu-aarch64"
   rc=0
+  echo "== FACT_TEST_TIME_SCALE=$time_scale (waiting deadlines and timeouts; no test checks a speed)"
   # shellcheck disable=SC2086  # CTEST_ARGS are words, e.g. CTEST_ARGS="-R Gossip"
   ctest --test-dir "$cross_build" --output-on-failure -j "$jobs" ${CTEST_ARGS:-} 2>&1 | tee "$build/ctest.log" || rc=$?
   ctest_line="$(grep -E '^[0-9]+% tests passed' "$build/ctest.log" | tail -n1 || true)"
   skipped="$(grep -c '\*\*\*Skipped\|Not Run' "$build/ctest.log" || true)"
   [ "${rc}" -eq 0 ] && [ -n "$ctest_line" ] || status=1
-  ctest_line="${ctest_line:-ctest failed to run} (skipped: $skipped; log: $build/ctest.log)"
+  ctest_line="${ctest_line:-ctest failed to run} (skipped: $skipped; FACT_TEST_TIME_SCALE=$time_scale; log: $build/ctest.log)"
   end
 
   # ---- 6. fact-solve arm64 vs x86-64
@@ -165,7 +170,7 @@ if ((run_tests)); then
   # ---- 7. gossip arm64 <-> x86-64
   begin "fact-gossip arm64 <-> x86-64"
   rc=0
-  sh "$here/test/arm64/gossip-exchange.sh" "$host_build/apps/fact-simgen" \
+  FACT_TEST_TIME_SCALE="$time_scale" sh "$here/test/arm64/gossip-exchange.sh" "$host_build/apps/fact-simgen" \
     "$host_build/apps/fact-gossip" "$cross_build/apps/fact-gossip.qemu" "$host_build/test/fact_round_inject" \
     "$host_build/test/fact_swarm_rounds_check" "$check/gossip" 2>&1 | tee "$build/gossip-exchange.log" || rc=$?
   gossip_line="$(tail -n1 "$build/gossip-exchange.log")"

@@ -26,6 +26,8 @@
 # Only when every item passes do gossip, solver and planner (the app that moves the drone) start.
 # Ctrl-C stops every app. Exit codes: 0 stopped by Ctrl-C (or --check-only passed); 1 the
 # checklist failed or an app died (the reason is printed); 2 bad flags.
+# Environment: BUILD_DIR (default <repo>/build); FACT_RUN_SUFFIX, appended to every app's path
+# (".qemu" runs the arm64 apps of a cross build under the emulator; test/arm64/cross_tests.cmake).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -92,6 +94,7 @@ if [ "$build" = 1 ]; then
     fact-fc-bridge fact-preflight >"$build_dir.build.log" 2>&1 || { tail -n 40 "$build_dir.build.log"; exit 1; }
 fi
 B="$build_dir"
+x="${FACT_RUN_SUFFIX:-}"
 mkdir -p "$out/logs"
 
 common=(--drone-id "$id")
@@ -129,13 +132,13 @@ check_alive() {
   done
 }
 
-start fact-vio-relay "$B/apps/fact-vio-relay" "${common[@]}" "${vio_src[@]}"
-start fact-fc-bridge "$B/firmware_bridge/fact-fc-bridge" "${common[@]}" "${fc_link[@]}" "${armflags[@]}"
-[ "$check_only" = 1 ] || start fact-detector "$B/apps/fact_detector/fact-detector" "${common[@]}" "${det_src[@]}"
+start fact-vio-relay "$B/apps/fact-vio-relay$x" "${common[@]}" "${vio_src[@]}"
+start fact-fc-bridge "$B/firmware_bridge/fact-fc-bridge$x" "${common[@]}" "${fc_link[@]}" "${armflags[@]}"
+[ "$check_only" = 1 ] || start fact-detector "$B/apps/fact_detector/fact-detector$x" "${common[@]}" "${det_src[@]}"
 sleep 0.5
 check_alive
 rc=0
-"$B/apps/fact-preflight" "${common[@]}" "${keyflag[@]}" "${pre_cam[@]}" --timeout "$preflight_timeout" || rc=$?
+"$B/apps/fact-preflight$x" "${common[@]}" "${keyflag[@]}" "${pre_cam[@]}" --timeout "$preflight_timeout" || rc=$?
 if [ "$rc" -ne 0 ]; then
   echo "run-drone: the pre-flight checklist failed: not starting gossip, solver or planner" >&2
   exit 1
@@ -143,9 +146,9 @@ fi
 [ "$check_only" = 1 ] && { echo "run-drone: --check-only: the checklist passed"; exit 0; }
 gossip_flags=("${keyflag[@]}")
 [ -n "$roster" ] && gossip_flags+=(--roster "$roster")
-start fact-gossip "$B/apps/fact-gossip" "${common[@]}" "${gossip_flags[@]}"
-start fact-solver "$B/apps/fact-solver" "${common[@]}"
-start fact-planner "$B/apps/fact_planner/fact-planner" "${common[@]}" "${pla_src[@]}"
+start fact-gossip "$B/apps/fact-gossip$x" "${common[@]}" "${gossip_flags[@]}"
+start fact-solver "$B/apps/fact-solver$x" "${common[@]}"
+start fact-planner "$B/apps/fact_planner/fact-planner$x" "${common[@]}" "${pla_src[@]}"
 echo "== drone $id flying its initialization; Ctrl-C stops every app. Events:"
 (cd "$out/logs" && exec tail --pid=$$ -q -n 0 -F fact-*.log 2>/dev/null |
   grep --line-buffered -E "state: |own round [0-9]+ closed|estimate: |error|failsafe|streaming|flight controller" |

@@ -3,7 +3,7 @@
 if(TARGET fact_mavlink)
   add_executable(fact_mavlink_tests test_mavlink.cpp)
   target_link_libraries(fact_mavlink_tests PRIVATE fact_mavlink Eigen3::Eigen GTest::gtest_main)
-  gtest_discover_tests(fact_mavlink_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 30)
+  fact_discover_tests(fact_mavlink_tests 30)
 endif()
 
 if(TARGET fact-fc-bridge)
@@ -22,7 +22,7 @@ if(TARGET fact-fc-bridge)
     FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
   target_link_libraries(fact_fc_bridge_tests PRIVATE fact_mavlink fact_lcmtypes GTest::gtest)
   add_dependencies(fact_fc_bridge_tests fact-fc-bridge)
-  gtest_discover_tests(fact_fc_bridge_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 30)
+  fact_discover_tests(fact_fc_bridge_tests 30)
 
   # Independent decoder: node-mavlink 2.3.0 (npm, installed into the build folder by the script)
   # decodes every message type the bridge sends. Skips (77) only without npm or the registry.

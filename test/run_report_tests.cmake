@@ -6,5 +6,5 @@ if(TARGET fact-run-report)
   target_link_libraries(fact_run_report_tests PRIVATE fact_run_report_eval fact_lcmtypes nlohmann_json::nlohmann_json
                         GTest::gtest_main)
   add_dependencies(fact_run_report_tests fact-run-report)
-  gtest_discover_tests(fact_run_report_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 60)
+  fact_discover_tests(fact_run_report_tests 60)
 endif()

@@ -9,6 +9,7 @@
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
+#include "test_time.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -26,6 +27,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -139,7 +141,7 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
   ASSERT_GT(pid, 0);
   int code = -2;
   const auto start = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - start < std::chrono::seconds(15)) {
+  while (std::chrono::steady_clock::now() - start < fact::test::scaled(std::chrono::seconds(15))) {
     lcm.handleTimeout(50);
     int st = 0;
     if (code == -2 && waitpid(pid, &st, WNOHANG) == pid) {
@@ -230,11 +232,14 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
   lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
   const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", url, "--status-period", "0.2"}, dir_ / "err");
   ASSERT_GT(pid, 0);
-  auto pump = [&](int ms) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
-    while (std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
+  // Handles messages until done() or `ms` × FACT_TEST_TIME_SCALE have passed.
+  auto pump_until = [&](const std::function<bool()>& done, int ms) {
+    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::milliseconds(ms));
+    while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
   };
-  pump(500);  // the app subscribes
+  auto pump = [&](int ms) { pump_until([] { return false; }, ms); };
+  pump_until([&] { return !status.empty(); }, 5000);  // the app's first status: it has subscribed
+  ASSERT_FALSE(status.empty()) << read_text(dir_ / "err");
   const fact::CameraIntrinsics k = fact::d430_424x240();
   auto frame = [&](int64_t seq) {
     fact::frame_t m;
@@ -284,7 +289,7 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
     lcm.publish("FACT_FRAMES_2", bytes.data(), static_cast<unsigned>(bytes.size() / 2));  // truncated
   }
   good();
-  pump(1200);
+  pump_until([&] { return got.size() >= 7; }, 1200);
   kill(pid, SIGTERM);
   const int code = exit_code(pid);
   pump(300);

@@ -38,6 +38,7 @@
 #include "fact/mavlink.h"
 #include "fact/mavlink_frames.h"
 #include "fact/setpoint_t.hpp"
+#include "test_time.h"
 
 extern char** environ;
 
@@ -232,6 +233,17 @@ fact::setpoint_t setpoint(double x, double y, double z, double yaw = 0.5) {
 
 void publish_sp(LcmSide& side, const fact::setpoint_t& s) { side.lcm.publish("FACT_SETPOINT_0", &s); }
 
+// Waits for the bridge's first status (it publishes it once it has subscribed), at most
+// 5 s × FACT_TEST_TIME_SCALE. Returns whether it came.
+bool bridge_up(LcmSide& side) {
+  const double end = now_s() + fact::test::scaled_s(5);
+  while (!side.have_status && now_s() < end) {
+    side.pump();
+    ::usleep(1000);
+  }
+  return side.have_status;
+}
+
 // Runs `every` about each ms for `seconds`, polling the FC socket and LCM.
 void run_for(double seconds, FakeFc& fc, LcmSide& side, const std::function<void(double t)>& every) {
   const double start = now_s();
@@ -258,7 +270,7 @@ TEST(FcBridge, StreamingStopsOnStaleSetpointOrLostHeartbeatAndResumes) {
   ASSERT_TRUE(fc.ok());
   LcmSide side;
   Process bridge(bridge_args(15100, 15101, {"--setpoint-timeout", "0.3", "--heartbeat-timeout", "0.6"}));
-  ::usleep(200000);
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
   double next_hb = 0, next_sp = 0;
   bool send_sp = true, send_hb = true;
   auto every = [&](double t) {
@@ -311,7 +323,7 @@ TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
   ASSERT_TRUE(fc.ok());
   LcmSide side;
   Process bridge(bridge_args(15110, 15111, {"--geofence", "-10,10,-10,10,0,5"}));
-  ::usleep(200000);
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<fact::setpoint_t> bad = {setpoint(nan, 0, 1), setpoint(0, 0, 1, nan), setpoint(11, 0, 1),
                                        setpoint(0, 0, 6), setpoint(0, -20, 1), setpoint(0, 0, -0.5)};
@@ -371,7 +383,7 @@ TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
   ASSERT_TRUE(fc.ok());
   LcmSide side;
   Process bridge(bridge_args(15120, 15121, {"--arm", "--offboard"}));
-  ::usleep(200000);
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
   mav::Encoder enc({1, 1});
   auto bad_crc = enc.encode(mav::LocalPositionNed{});
   bad_crc[12] ^= 0x40;
@@ -440,7 +452,7 @@ TEST(FcBridge, SerialLinkOnAPseudoTerminal) {
   std::vector<mav::Frame> frames;
   const double start = now_s();
   ::fcntl(master, F_SETFL, O_NONBLOCK);
-  while (now_s() - start < 1.5 && frames.empty()) {
+  while (now_s() - start < fact::test::scaled_s(1.5) && frames.empty()) {
     uint8_t buf[512];
     const ssize_t n = ::read(master, buf, sizeof buf);
     if (n > 0) parser.feed(buf, static_cast<std::size_t>(n), [&](const mav::Frame& f) { frames.push_back(f); }, nullptr);

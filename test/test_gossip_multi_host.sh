@@ -14,6 +14,7 @@
 # identical across drones and equal to what was injected, and every gossip exits 0 on SIGTERM.
 # Exit 77 (skipped) without root, ip or unshare. Namespaces and processes are removed on any exit.
 set -eu
+. "$(dirname "$0")/lib.sh"  # wait_until, scaled (FACT_TEST_TIME_SCALE)
 
 if [ "$#" -ne 5 ]; then
   echo "usage: $0 NETNS_RUN SIMGEN GOSSIP INJECT CHECK" >&2
@@ -63,17 +64,6 @@ fail() {
   exit 1
 }
 
-# wait_until SECONDS CMD...: polls CMD every 0.1 s; fails after SECONDS.
-wait_until() {
-  limit=$1
-  shift
-  n=0
-  while ! "$@"; do
-    n=$((n + 1))
-    [ "$n" -ge $((limit * 10)) ] && return 1
-    sleep 0.1
-  done
-}
 has() { grep -a -q -- "$2" "$1" 2>/dev/null; }
 all_have() {  # all_have SUFFIX TEXT: every drone's file $WORK/<kind><i><suffix> contains TEXT
   j=0
@@ -110,10 +100,10 @@ done
 i=0
 while [ "$i" -lt "$DRONES" ]; do
   ns="$PREFIX-$i"
-  ip netns exec "$ns" timeout 45 lcm-logger -q -f --lcm-url="$URL" -c "FACT_SWARM_ROUNDS_$i|FACT_STATUS" \
+  ip netns exec "$ns" timeout "$(scaled 45)" lcm-logger -q -f --lcm-url="$URL" -c "FACT_SWARM_ROUNDS_$i|FACT_STATUS" \
     "$WORK/rec$i.lcm" 2>"$WORK/logger$i.log" &
   PIDS="$PIDS $!"
-  ip netns exec "$ns" timeout 45 "$GOSSIP" --drone-id "$i" --lcm-url "$URL" --key-file "$WORK/swarm.key" \
+  ip netns exec "$ns" timeout "$(scaled 45)" "$GOSSIP" --drone-id "$i" --lcm-url "$URL" --key-file "$WORK/swarm.key" \
     --rounds-from-channel --roster 0,1,2,3 --min-members "$DRONES" --summary-period 0.5 --settle 0.6 \
     --status-period 0.25 2>"$WORK/gossip$i.log" &
   PIDS="$PIDS $!"
@@ -126,7 +116,7 @@ wait_until 10 all_have rec .lcm FACT_STATUS || fail "not every lcm-logger record
 
 i=0
 while [ "$i" -lt "$DRONES" ]; do
-  ip netns exec "$PREFIX-$i" timeout 20 "$INJECT" --lcm-url "$URL" --drone-id "$i" --input "$WORK/rounds.json" \
+  ip netns exec "$PREFIX-$i" timeout "$(scaled 20)" "$INJECT" --lcm-url "$URL" --drone-id "$i" --input "$WORK/rounds.json" \
     --rounds "$ROUNDS" 2>"$WORK/inject$i.log" || fail "fact_round_inject failed for drone $i"
   i=$((i + 1))
 done

@@ -21,6 +21,7 @@
 #include "fact/round_packet_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 #include "fact_gossip/wire.h"
+#include "test_time.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -154,11 +155,20 @@ class Observer {
         if (fds[i].revents & POLLIN) lcms_[i]->handle();
     }
   }
-  // Spins until pred() or `seconds` pass; returns pred().
+  // Spins until pred() or `seconds` × FACT_TEST_TIME_SCALE pass; returns pred().
   bool wait_for(const std::function<bool()>& pred, double seconds) {
-    const int64_t end = now_us() + static_cast<int64_t>(seconds * 1e6);
+    const int64_t end = now_us() + static_cast<int64_t>(fact::test::scaled_s(seconds) * 1e6);
     while (!pred() && now_us() < end) spin(50);
     return pred();
+  }
+  // Spins for `seconds` × FACT_TEST_TIME_SCALE: time for a few more status messages to arrive.
+  void settle(double seconds) { spin(static_cast<int>(fact::test::scaled_s(seconds) * 1000)); }
+  // Whether each (app, drone id) has published a status (so it has subscribed: the apps
+  // subscribe before their loop, which publishes the status).
+  bool have_status(const std::vector<std::pair<std::string, int>>& apps) {
+    for (const auto& a : apps)
+      if (!states.count(a)) return false;
+    return true;
   }
 
   bool good = true;
@@ -260,7 +270,10 @@ TEST_F(GossipProcesses, LossyRestartedAndAttackedSwarmAgreesByteForByte) {
   for (int i = 0; i < kDrones; ++i)
     procs.start("gossip" + std::to_string(i), gossip_args(i, drone_url(i), dir_ + "/swarm.key", true), log_);
   procs.start("intruder", gossip_args(kWrongKeyId, kSwarmUrl, dir_ + "/wrong.key", false), log_);
-  obs.spin(1000);  // subscriptions up, settled
+  std::vector<std::pair<std::string, int>> apps = {{"fact-gossip", kWrongKeyId}};
+  for (int i = 0; i < kDrones; ++i) apps.insert(apps.end(), {{"fact-gossip", i}, {"fact-fault-relay", i}});
+  ASSERT_TRUE(obs.wait_for([&] { return obs.have_status(apps); }, 10)) << "not every process is up";
+  obs.spin(500);  // the gossips hear each other's summaries
 
   const auto inject = [&](int round) {
     for (int i = 0; i < kDrones; ++i) {
@@ -299,7 +312,7 @@ TEST_F(GossipProcesses, LossyRestartedAndAttackedSwarmAgreesByteForByte) {
   obs.spin(100);
   inject(3);
   ASSERT_TRUE(obs.wait_for([&] { return all_complete(4); }, 10)) << "rounds 0–3 not complete everywhere";
-  obs.spin(700);  // a few more status messages
+  obs.settle(0.7);  // a few more status messages
 
   // Byte-identical, and exactly what was injected (drones ascending, then rounds).
   fact::swarm_rounds_t expected;
@@ -354,7 +367,7 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   procs.start("gossip4", {FACT_GOSSIP_BINARY, "--drone-id", "4", "--lcm-url", url, "--insecure", "--min-members", "1",
                           "--settle", "0.2", "--status-period", "0.2"},
               log_);
-  obs.spin(500);
+  ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 4}}); }, 5)) << "fact-gossip is not up";
 
   fact::gossip::RoundBuilder local;  // the same defaults as fact-gossip's
   const int64_t t_start = 1700000000000000;
@@ -409,7 +422,7 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   ASSERT_EQ(rounds[0].data.observations.size(), 2u);
 
   ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds.count(4) > 0; }, 5)) << "no round published";
-  obs.spin(500);
+  obs.settle(0.5);
   const fact::swarm_rounds_t& got = obs.latest_rounds[4];
   ASSERT_EQ(got.complete_rounds, 1);
   ASSERT_EQ(got.num_packets, 1);

@@ -9,6 +9,7 @@
 #   test_lcm_spy.sh SOURCE_DIR PUBLISHER JAR OUT_DIR
 # Exit 0 pass, 1 fail, 77 skip (no Xvfb / java / jar / root).
 set -u
+. "$(dirname "$0")/lib.sh"  # wait_until, scaled (FACT_TEST_TIME_SCALE)
 if [ "$#" -ne 4 ]; then echo "usage: $0 SOURCE_DIR PUBLISHER JAR OUT_DIR" >&2; exit 2; fi
 src="$1" pub="$2" jar="$3" out="$4"
 url='udpm://239.255.76.67:7667?ttl=0'
@@ -34,27 +35,24 @@ pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; }
 trap cleanup EXIT
 
-# Poll `cmd` every 0.1 s for up to $1 seconds.
-wait_for() { local limit=$(( $1 * 10 )); shift; local i=0; until "$@"; do i=$((i + 1)); [ "$i" -ge "$limit" ] && return 1; sleep 0.1; done; }
-
 # Xvfb picks a free display itself and writes its number to fd 3.
-timeout 60 Xvfb -displayfd 3 -screen 0 1024x768x24 -nolisten tcp 3>"$out/display" >"$out/xvfb.log" 2>&1 &
+timeout "$(scaled 60)" Xvfb -displayfd 3 -screen 0 1024x768x24 -nolisten tcp 3>"$out/display" >"$out/xvfb.log" 2>&1 &
 pids+=($!)
-wait_for 10 test -s "$out/display" || fail "Xvfb did not start: $(cat "$out/xvfb.log")"
+wait_until 10 test -s "$out/display" || fail "Xvfb did not start: $(cat "$out/xvfb.log")"
 export DISPLAY=":$(head -n1 "$out/display")"
 echo "Xvfb on $DISPLAY"
 
-FACT_LCM_JAR="$jar" timeout 60 "$src/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
+FACT_LCM_JAR="$jar" timeout "$(scaled 60)" "$src/scripts/spy.sh" "$url" >"$out/spy.log" 2>&1 &
 spy=$!
 pids+=("$spy")
-wait_for 20 grep -Eq 'Found [0-9]+ LCM types' "$out/spy.log" || fail "lcm-spy did not report its LCM types"
+wait_until 20 grep -Eq 'Found [0-9]+ LCM types' "$out/spy.log" || fail "lcm-spy did not report its LCM types"
 found=$(sed -nE 's/.*Found ([0-9]+) LCM types.*/\1/p' "$out/spy.log" | head -n1)
 want=$(ls "$src"/lcmtypes/fact_*_t.lcm | wc -l)
 echo "lcm-spy: Found $found LCM types (lcmtypes/ has $want)"
 [ "$found" -ge "$want" ] || fail "lcm-spy found $found LCM types, fewer than the $want in lcmtypes/"
-wait_for 20 sh -c 'xwininfo -root -tree | grep -q "\"LCM Spy\""' || fail "no \"LCM Spy\" window on $DISPLAY"
+wait_until 20 sh -c 'xwininfo -root -tree | grep -q "\"LCM Spy\""' || fail "no \"LCM Spy\" window on $DISPLAY"
 
-timeout 20 "$pub" --lcm-url "$url" --drone-id 3 --count 10 --period-ms 50 >"$out/publish.log" 2>&1 ||
+timeout "$(scaled 20)" "$pub" --lcm-url "$url" --drone-id 3 --count 10 --period-ms 50 >"$out/publish.log" 2>&1 ||
   fail "fact-lcm-publish-sample failed: $(cat "$out/publish.log")"
 sleep 1  # let the spy's table refresh before the screenshot
 kill -0 "$spy" 2>/dev/null || fail "lcm-spy exited while our messages arrived"
@@ -63,9 +61,9 @@ xwd -root -silent -out "$out/lcm_spy.xwd" && echo "screenshot: $out/lcm_spy.xwd"
 if command -v convert >/dev/null 2>&1; then convert "xwd:$out/lcm_spy.xwd" "$out/lcm_spy.png" 2>/dev/null && echo "screenshot: $out/lcm_spy.png"; fi
 
 # The same messages into a log file, decoded by the jar's classes as lcm-spy finds them.
-timeout 20 "$pub" --lcm-url "file://$out/sample.lcmlog?mode=w" --drone-id 3 --count 1 >>"$out/publish.log" 2>&1 ||
+timeout "$(scaled 20)" "$pub" --lcm-url "file://$out/sample.lcmlog?mode=w" --drone-id 3 --count 1 >>"$out/publish.log" 2>&1 ||
   fail "fact-lcm-publish-sample could not write $out/sample.lcmlog"
-timeout 60 java -cp "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$jar" "$src/test/LcmDecodeCheck.java" "$out/sample.lcmlog" >"$out/decode.txt" 2>&1 ||
+timeout "$(scaled 60)" java -cp "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$jar" "$src/test/LcmDecodeCheck.java" "$out/sample.lcmlog" >"$out/decode.txt" 2>&1 ||
   fail "the jar did not decode every message"
 for type in app_status_t detections_t fc_state_t frame_t gossip_packet_t gossip_request_t gossip_summary_t \
             odometry_t round_packet_t setpoint_t sim_clock_t swarm_result_t swarm_rounds_t truth_t; do

@@ -42,6 +42,7 @@
 #include "fact/setpoint_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "test_time.h"
 
 extern char** environ;
 
@@ -104,9 +105,9 @@ class Process {
     code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return false;
   }
-  // The exit code, −1 if killed by a signal, −2 if still running after `limit`.
+  // The exit code, −1 if killed by a signal, −2 if still running after `limit` × FACT_TEST_TIME_SCALE.
   int wait_for(Clock::duration limit) {
-    const auto end = Clock::now() + limit;
+    const auto end = Clock::now() + fact::test::scaled(limit);
     while (running()) {
       if (Clock::now() >= end) return -2;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -162,8 +163,12 @@ class World {
   std::function<void(const std::string&)> on_state;  // called on each new state
   std::function<void()> on_step;                      // called after each integrator step
 
-  // Runs the world for up to `limit`, until `done()`.
-  bool run(const std::function<bool()>& done, Clock::duration limit) {
+  // Runs the world until `done()`, giving up after `limit` × FACT_TEST_TIME_SCALE.
+  bool run(const std::function<bool()>& done, Clock::duration limit) { return run_while(done, fact::test::scaled(limit)); }
+  // Runs the world for exactly `span` (a window in which the planner's output is counted).
+  void run_for(Clock::duration span) { run_while([] { return false; }, span); }
+  // Runs the world until `done()` or for `limit`, whichever comes first.
+  bool run_while(const std::function<bool()>& done, Clock::duration limit) {
     const auto end = Clock::now() + limit;
     auto last = Clock::now();
     while (!done()) {
@@ -397,7 +402,7 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
   // Setpoints stream from the first odometry on: count over 2 s.
   ASSERT_TRUE(w.run([&] { return w.setpoints.size() >= 1; }, std::chrono::seconds(5))) << "no setpoint";
   const size_t n0 = w.setpoints.size();
-  w.run([] { return false; }, std::chrono::seconds(2));
+  w.run_for(std::chrono::seconds(2));
   const double rate = (w.setpoints.size() - n0) / 2.0;
   EXPECT_GE(rate, 20.0) << "setpoints per second";
   ASSERT_TRUE(w.run([&] { return starts_with(w.state, "done"); }, std::chrono::seconds(12)))
@@ -417,7 +422,7 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
   EXPECT_GE(min_sep_during_move, 1.0) << "came closer than min_separation to another drone";
   // Certified: hold — velocity 0, position constant.
   size_t h0 = w.setpoints.size();
-  w.run([] { return false; }, std::chrono::milliseconds(1000));
+  w.run_for(std::chrono::milliseconds(1000));
   ASSERT_GT(w.setpoints.size(), h0 + 20);
   const fact::setpoint_t& first = w.setpoints[h0].second;
   for (size_t i = h0; i < w.setpoints.size(); ++i) {
@@ -442,7 +447,7 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
   ASSERT_TRUE(w.run([&] { return starts_with(w.state, "hover: odometry stale"); }, std::chrono::seconds(3)))
       << w.state;
   const size_t s0 = w.setpoints.size();
-  w.run([] { return false; }, std::chrono::milliseconds(500));
+  w.run_for(std::chrono::milliseconds(500));
   EXPECT_GE(w.setpoints.size() - s0, 10u) << "setpoints must continue while hovering";
   for (size_t i = s0; i < w.setpoints.size(); ++i) EXPECT_EQ(w.setpoints[i].second.velocity[2], 0.0);
   w.odometry_on = true;

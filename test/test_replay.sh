@@ -15,20 +15,10 @@
 # Then fact_lcm_log_compare compares FACT_RESULT_1 in both logs. Every process is time-limited
 # and stopped at the end. Exit 0 when identical.
 set -eu
+. "$(dirname "$0")/lib.sh"  # wait_until, scaled (FACT_TEST_TIME_SCALE)
 
 URL='udpm://239.255.76.67:7667?ttl=0'
 
-# wait_until SECONDS CMD...: polls CMD every 0.1 s; fails after SECONDS.
-wait_until() {
-  limit=$1
-  shift
-  i=0
-  while ! "$@"; do
-    i=$((i + 1))
-    if [ "$i" -ge $((limit * 10)) ]; then return 1; fi
-    sleep 0.1
-  done
-}
 
 # occurrences FILE TEXT: how many times TEXT appears in FILE (binary files too).
 occurrences() { grep -a -o -- "$2" "$1" 2>/dev/null | wc -l; }
@@ -49,12 +39,12 @@ fail() {
 phase_record() {
   lcm-logger -q -f --lcm-url="$URL" -c 'FACT_.*' "$WORK/original.lcm" 2>"$WORK/logger1.log" &
   logger=$!
-  timeout 30 "$SOLVER" --drone-id 1 --lcm-url "$URL" --status-period 0.1 2>"$WORK/solver1.log" &
+  timeout "$(scaled 30)" "$SOLVER" --drone-id 1 --lcm-url "$URL" --status-period 0.1 2>"$WORK/solver1.log" &
   solver=$!
   trap 'stop $solver $logger' EXIT
   # The logger is live once it has recorded the solver's heartbeat.
   wait_until 10 has_at_least "$WORK/original.lcm" FACT_STATUS 1 || fail "lcm-logger recorded no FACT_STATUS"
-  timeout 20 "$PUBLISH" --lcm-url "$URL" --drone-id 1 --input "$WORK/rounds.json" \
+  timeout "$(scaled 20)" "$PUBLISH" --lcm-url "$URL" --drone-id 1 --input "$WORK/rounds.json" \
     --incremental --count 4 --interval 0.3 2>"$WORK/publish.log" || fail "fact-rounds-publish failed"
   wait_until 10 has_at_least "$WORK/solver1.log" "estimate:" 3 || fail "the solver did not estimate 3 times"
   wait_until 10 has_at_least "$WORK/original.lcm" FACT_RESULT_1 3 || fail "lcm-logger recorded fewer than 3 results"
@@ -66,12 +56,12 @@ phase_record() {
 phase_replay() {
   lcm-logger -q -f --lcm-url="$URL" -c 'FACT_RESULT_.*|FACT_STATUS' "$WORK/replay.lcm" 2>"$WORK/logger2.log" &
   logger=$!
-  timeout 30 "$SOLVER" --drone-id 1 --lcm-url "$URL" --status-period 0.1 2>"$WORK/solver2.log" &
+  timeout "$(scaled 30)" "$SOLVER" --drone-id 1 --lcm-url "$URL" --status-period 0.1 2>"$WORK/solver2.log" &
   solver=$!
   trap 'stop $solver $logger' EXIT
   wait_until 10 has_at_least "$WORK/replay.lcm" FACT_STATUS 1 || fail "lcm-logger recorded no FACT_STATUS"
   # Only the solver's input is played: the original results stay out of the fresh run.
-  timeout 20 lcm-logplayer --lcm-url="$URL" --regexp='FACT_SWARM_ROUNDS_1' "$WORK/original.lcm" \
+  timeout "$(scaled 20)" lcm-logplayer --lcm-url="$URL" --regexp='FACT_SWARM_ROUNDS_1' "$WORK/original.lcm" \
     >"$WORK/logplayer.log" 2>&1 || fail "lcm-logplayer failed"
   wait_until 10 has_at_least "$WORK/solver2.log" "estimate:" 3 || fail "the fresh solver did not estimate 3 times"
   wait_until 10 has_at_least "$WORK/replay.lcm" FACT_RESULT_1 3 || fail "lcm-logger recorded fewer than 3 replayed results"
@@ -101,8 +91,8 @@ trap 'rm -rf "$WORK"' EXIT
 
 "$SIMGEN" --drones 5 --rounds 3 --noise depth --seed 11 --output "$WORK/rounds.json" || fail "fact-simgen failed"
 SELF=$(readlink -f "$0")
-timeout 60 "$NETNS_RUN" sh "$SELF" --phase record "$WORK" "$SOLVER" "$PUBLISH" || fail "the recording phase failed"
-timeout 60 "$NETNS_RUN" sh "$SELF" --phase replay "$WORK" "$SOLVER" "$PUBLISH" || fail "the replay phase failed"
+timeout "$(scaled 60)" "$NETNS_RUN" sh "$SELF" --phase record "$WORK" "$SOLVER" "$PUBLISH" || fail "the recording phase failed"
+timeout "$(scaled 60)" "$NETNS_RUN" sh "$SELF" --phase replay "$WORK" "$SOLVER" "$PUBLISH" || fail "the replay phase failed"
 [ "$(occurrences "$WORK/original.lcm" FACT_SWARM_ROUNDS_1)" -eq 4 ] ||
   fail "expected 4 FACT_SWARM_ROUNDS_1 messages in the original log, found $(occurrences "$WORK/original.lcm" FACT_SWARM_ROUNDS_1)"
 "$COMPARE" "$WORK/original.lcm" "$WORK/replay.lcm" FACT_RESULT_1 certified || fail "the replay's results differ"

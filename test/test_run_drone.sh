@@ -5,11 +5,14 @@
 # runs fact-preflight: it passes with everything present, and fails, naming the item, with a
 # missing key, a world-readable key, a flight controller on the wrong port and no camera frames.
 #
-#   test/test_run_drone.sh REPO BUILD_DIR
+#   test/test_run_drone.sh REPO BUILD_DIR [RUN_SUFFIX]
 #
+# RUN_SUFFIX (".qemu" in cross builds) is appended to every app's path (FACT_RUN_SUFFIX of
+# run-drone.sh). The pre-flight timeouts are scaled by FACT_TEST_TIME_SCALE (test/lib.sh).
 # Re-runs itself in a private network namespace (scripts/netns-run.sh); exit 77 if none can be made.
 set -eu
-REPO=$1 BUILD=$2
+. "$(dirname "$0")/lib.sh"  # scaled (FACT_TEST_TIME_SCALE)
+REPO=$1 BUILD=$2 SUFFIX=${3:-}
 if [ -z "${FACT_RUN_DRONE_INNER:-}" ]; then
   rc=0
   FACT_RUN_DRONE_INNER=1 "$REPO/scripts/netns-run.sh" sh "$0" "$@" || rc=$?
@@ -18,7 +21,7 @@ if [ -z "${FACT_RUN_DRONE_INNER:-}" ]; then
 fi
 WORK=$(mktemp -d /tmp/fact-run-drone-XXXXXX)
 URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'
-"$BUILD/apps/fact_sim/fact-sim" --world "$REPO/apps/fact_sim/worlds/small.json" --drones 1 --rate 1 --duration 120 \
+"$BUILD/apps/fact_sim/fact-sim$SUFFIX" --world "$REPO/apps/fact_sim/worlds/small.json" --drones 1 --rate 1 --duration "$(scaled 120)" \
   --camera-rate 5 --mavlink-port 14600 --lcm-url "$URL" 2>"$WORK/sim.log" &
 SIM=$!
 trap 'kill $SIM 2>/dev/null; wait $SIM 2>/dev/null; rm -rf "$WORK"' EXIT
@@ -30,24 +33,24 @@ check() {
   expected=$1
   shift
   rc=0
-  BUILD_DIR="$BUILD" "$REPO/scripts/run-drone.sh" --id 0 --camera lcm --vio lcm --lcm-url "$URL" --sim-clock \
+  BUILD_DIR="$BUILD" FACT_RUN_SUFFIX="$SUFFIX" "$REPO/scripts/run-drone.sh" --id 0 --camera lcm --vio lcm --lcm-url "$URL" --sim-clock \
     --no-build --check-only --out "$WORK/drone" "$@" >"$WORK/out" 2>&1 || rc=$?
   [ "$rc" -eq "$expected" ] || fail "run-drone.sh $* exited $rc, expected $expected"
 }
-check 0 --fc udp:14540:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 10
+check 0 --fc udp:14540:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 10)"
 for item in "swarm key" "flight controller" "camera" "VIO"; do
   grep -q "\[PASS\] $item" "$WORK/out" || fail "the checklist did not pass '$item'"
 done
 grep -q "HEARTBEAT" "$WORK/out" || fail "the flight-controller line does not report the heartbeat"
-check 1 --fc udp:14541:127.0.0.1:14600 --key "$WORK/missing.key" --preflight-timeout 3
+check 1 --fc udp:14541:127.0.0.1:14600 --key "$WORK/missing.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] swarm key" "$WORK/out" || fail "a missing key file did not fail the key item"
 chmod 644 "$WORK/swarm.key"
-check 1 --fc udp:14542:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 3
+check 1 --fc udp:14542:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] swarm key.*readable by every user" "$WORK/out" || fail "a world-readable key did not fail"
 chmod 600 "$WORK/swarm.key"
-check 1 --fc udp:14543:127.0.0.1:14699 --key "$WORK/swarm.key" --preflight-timeout 3
+check 1 --fc udp:14543:127.0.0.1:14699 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] flight controller" "$WORK/out" || fail "a flight controller on the wrong port did not fail"
-check 1 --fc udp:14544:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 3 \
+check 1 --fc udp:14544:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)" \
   --camera 'lcm:udpm://239.255.77.9:7799?ttl=0'
 grep -q "\[FAIL\] camera" "$WORK/out" || fail "no camera frames did not fail the camera item"
 grep -q "must not fly" "$WORK/out" || fail "a failed checklist did not say the drone must not fly"

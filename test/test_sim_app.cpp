@@ -7,6 +7,7 @@
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, and
 // the URLs have ttl=0. Paths come from FACT_SIM_BINARY, FACT_NETNS_RUN.
 #include "common/app.h"
+#include "test_time.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
 #include "fact/odometry_t.hpp"
@@ -90,9 +91,9 @@ class SimProcess {
     fs::remove(err_path_);
   }
   bool started() const { return started_; }
-  // Exit code, or -1 after timeout_s (the process is then killed).
+  // Exit code, or -1 after timeout_s × FACT_TEST_TIME_SCALE.
   int wait(double timeout_s = 20) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::duration<double>(timeout_s));
     while (std::chrono::steady_clock::now() < end) {
       int status = 0;
       if (waitpid(pid_, &status, WNOHANG) == pid_) {
@@ -152,9 +153,9 @@ class Listener {
   }
   bool good() { return lcm_.good(); }
   lcm::LCM& lcm() { return lcm_; }
-  // Handles messages until done() or timeout.
+  // Handles messages until done() or timeout_s × FACT_TEST_TIME_SCALE.
   bool pump_until(const std::function<bool()>& done, double timeout_s = 15) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::duration<double>(timeout_s));
     while (std::chrono::steady_clock::now() < end) {
       if (done()) return true;
       lcm_.handleTimeout(20);

@@ -14,6 +14,7 @@
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless only lo is visible. Paths come from
 // FACT_SIM_BINARY, FACT_FC_BRIDGE_BINARY, FACT_NETNS_RUN.
 #include "common/app.h"
+#include "test_time.h"
 #include "fact/fc_state_t.hpp"
 #include "fact/mavlink.h"
 #include "fact/mavlink_frames.h"
@@ -75,6 +76,8 @@ bool only_loopback() {
 std::string url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 
 double wall_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+// The wall time at which to give up waiting: `seconds` × FACT_TEST_TIME_SCALE from now.
+double deadline_s(double seconds) { return wall_s() + fact::test::scaled_s(seconds); }
 
 // Two drones, ids 2 and 3, at fixed starts with non-zero yaw (so f_i differs from the world), in
 // an 8 x 8 x 3 m room without obstacles.
@@ -122,9 +125,9 @@ class Process {
     fs::remove(err_path_, ec);
   }
   bool started() const { return started_; }
-  // Exit code, or -1 after timeout_s (then killed).
+  // Exit code, or -1 after timeout_s × FACT_TEST_TIME_SCALE (then killed).
   int wait(double timeout_s = 10) {
-    const double end = wall_s() + timeout_s;
+    const double end = deadline_s(timeout_s);
     while (wall_s() < end) {
       int status = 0;
       if (waitpid(pid_, &status, WNOHANG) == pid_) {
@@ -304,7 +307,7 @@ TEST(SimFc, BridgeLoopFliesACommandedSquareAndHoversWhenSetpointsStop) {
   // Plays the planner: a setpoint every 40 ms of sim time (25 Hz), along trajectory(sim - T0)
   // where T0 is when the bridge's fc_state first shows armed + OFFBOARD; (0, 0, 0) before.
   double t0 = -1, next_pub = 0;
-  const double wall_end = wall_s() + 40;
+  const double wall_end = deadline_s(40);
   while (wall_s() < wall_end) {
     side.pump(2);
     const double now = side.sim_s();
@@ -520,7 +523,7 @@ TEST(SimFc, RawMavlinkCommandsTypeMaskFailsafeAndRejections) {
   ASSERT_TRUE(peer.ok());
   // Runs until `sim_s` seconds of simulation time, calling every(now) each ~2 ms of wall time.
   auto run_until = [&](double until, const std::function<void(double)>& every) {
-    const double wall_end = wall_s() + 20;
+    const double wall_end = deadline_s(20);
     while (wall_s() < wall_end && side.sim_s() < until) {
       side.pump(2);
       peer.poll();
@@ -666,7 +669,7 @@ TEST(SimFc, AutoArmStartsArmedInOffboard) {
   ASSERT_TRUE(peer.ok());
   const auto up = ned_setpoint(0, 0, -0.8f);
   double next = 0;
-  const double wall_end = wall_s() + 15;
+  const double wall_end = deadline_s(15);
   while (wall_s() < wall_end && side.sim_s() < 3.0) {
     side.pump(2);
     peer.poll();

@@ -1,12 +1,11 @@
 // The simulator's renderer and ground-truth helper: a drone placed at a known pose appears at its
 // projected pixel with the right depth, the depth noise RMS follows σ = z²·0.08/(fx·0.05) on a flat
 // wall, depth is 0 beyond 10 m and below 0.2 m, 1 mm quantisation, attitude (pitch) moves the
-// image, line of sight, determinism by seed, and the speed (frames per second, printed).
+// image, line of sight, determinism by seed, and complete frames for 4 turning drones.
 #include "fact/sim_render.h"
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -216,23 +215,40 @@ TEST(SimRender, SameSeedSameBytes) {
     }
 }
 
-// Frames per second for 4 drones at 424 × 240 on this core (the target is ≥ 60 in total; the
-// assertion only guards against a gross regression, since CI machines are shared).
-TEST(SimRender, SpeedFourDrones424x240) {
+// Four drones of the default world turning one step per frame, each camera in turn (the load of
+// fact-sim with 4 drones): every frame is complete — full-size buffers, every pixel on the room, an
+// obstacle or another drone (never the viewer itself), with depth — and a camera's successive
+// frames differ as it turns. How fast this runs is fact-bench-detector's renderer figure
+// (BENCHMARKS.md), not a test.
+TEST(SimRender, FourDronesTurningEveryFrameComplete) {
   const World w = fact::sim::default_world(4, 7);
   std::vector<DronePose> drones;
   for (const auto& s : w.starts) drones.push_back(pose(s.position.x(), s.position.y(), 1.5, s.yaw));
   Renderer r(w, fact::d430_424x240(), {}, {}, 1);
+  const size_t pixels = 424u * 240u;
+  std::vector<std::vector<uint8_t>> last_gray(4);
   RenderedFrame f;
-  const int n = 120;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < n; ++k) {
-    drones[static_cast<size_t>(k % 4)].yaw += 0.05;
-    r.render(drones, k % 4, &f);
+  for (int k = 0; k < 120; ++k) {
+    const int viewer = k % 4;
+    drones[static_cast<size_t>(viewer)].yaw += 0.05;
+    r.render(drones, viewer, &f);
+    ASSERT_EQ(f.gray.size(), pixels);
+    ASSERT_EQ(f.depth_mm.size(), pixels);
+    ASSERT_EQ(f.object_id.size(), pixels);
+    ASSERT_EQ(f.depth_true.size(), pixels);
+    size_t hit = 0, with_depth = 0;
+    for (size_t i = 0; i < pixels; ++i) {
+      const int id = f.object_id[i];
+      ASSERT_TRUE(id == fact::sim::kIdRoom || id == fact::sim::kIdObstacle || (id >= 0 && id < 4 && id != viewer))
+          << "frame " << k << " pixel " << i << " id " << id;
+      hit += f.depth_true[i] > 0;
+      with_depth += f.depth_mm[i] > 0;
+    }
+    EXPECT_EQ(hit, pixels) << "frame " << k << ": a closed room, every ray hits something";
+    EXPECT_GT(with_depth, pixels / 2) << "frame " << k;
+    EXPECT_NE(f.gray, last_gray[static_cast<size_t>(viewer)]) << "frame " << k << ": the camera turned";
+    last_gray[static_cast<size_t>(viewer)] = f.gray;
   }
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("renderer: %.1f frames/s (%.2f ms/frame) at 424x240, 4 drones\n", n / s, 1e3 * s / n);
-  EXPECT_GT(n / s, 20.0);
 }
 
 }  // namespace

@@ -41,6 +41,7 @@
 #include "fact/simgen.h"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "test_time.h"
 
 extern char** environ;
 
@@ -108,10 +109,10 @@ class Process {
     finish(status);
     return false;
   }
-  // Waits up to `limit` for the process to exit: its exit code, −1 if killed by a signal, −2 if
-  // still running.
+  // Waits up to `limit` × FACT_TEST_TIME_SCALE for the process to exit: its exit code, −1 if
+  // killed by a signal, −2 if still running.
   int wait_for(Clock::duration limit) {
-    const auto end = Clock::now() + limit;
+    const auto end = Clock::now() + fact::test::scaled(limit);
     while (running()) {
       if (Clock::now() >= end) return -2;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -145,9 +146,9 @@ class Listener {
 
   void listen(const std::string& channel) { lcm_.subscribe(channel, &Listener::on_message, this); }
 
-  // Handles messages until `done()` holds or `limit` passes; returns done().
+  // Handles messages until `done()` holds or `limit` × FACT_TEST_TIME_SCALE passes; returns done().
   bool until(const std::function<bool()>& done, Clock::duration limit = std::chrono::seconds(8)) {
-    const auto end = Clock::now() + limit;
+    const auto end = Clock::now() + fact::test::scaled(limit);
     while (!done()) {
       if (Clock::now() >= end) return false;
       lcm_.handleTimeout(50);

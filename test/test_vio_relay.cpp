@@ -38,6 +38,7 @@
 
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
+#include "test_time.h"
 
 extern char** environ;
 
@@ -151,10 +152,10 @@ class Listener {
   bool good() { return lcm_.good(); }
   lcm::LCM& lcm() { return lcm_; }
 
-  // Handles messages until done() holds or 10 s pass (a guard against a hang, not a speed
-  // requirement). Returns done().
+  // Handles messages until done() holds or 10 s × FACT_TEST_TIME_SCALE pass (a guard against a
+  // hang, not a speed requirement). Returns done().
   bool pump_until(const std::function<bool()>& done) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    const auto deadline = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::seconds(10));
     while (!done()) {
       if (std::chrono::steady_clock::now() > deadline) return false;
       lcm_.handleTimeout(50);

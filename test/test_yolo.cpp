@@ -11,7 +11,6 @@
 
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -362,7 +361,7 @@ TEST_F(TinyYolo, BadFramesGiveErrorsNotBoxes) {
   EXPECT_EQ(error, "");
 }
 
-TEST_F(TinyYolo, FullSizeInputWithoutResizeAndTiming) {
+TEST_F(TinyYolo, FullSizeInputWithoutResize) {
   // 640 × 480 into 640: scale 1, pad_y = 80; cell (i, j) covers u ∈ [8j, 8j + 8),
   // v ∈ [8i − 80, 8i − 72). One patch in cell (30, 50): u ∈ [400, 408), v ∈ [160, 168).
   Scene s(640, 480);
@@ -370,20 +369,9 @@ TEST_F(TinyYolo, FullSizeInputWithoutResizeAndTiming) {
   auto det = load(model(640), options(640));
   ASSERT_TRUE(det);
   const double score = sigmoid(20.0 * 179 / 255 - 12);
-  expect_boxes(det->detect(s.view()), {expected_box(30, 50, 180, score, 1.0, 0, 80, 640, 480)});
-
-  auto small = load(model(160), options(160));
-  ASSERT_TRUE(small);
-  for (auto* d : {small.get(), det.get()}) {
-    const int runs = 10;
-    const auto t0 = std::chrono::steady_clock::now();
-    for (int r = 0; r < runs; ++r) d->detect(s.view());
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / runs;
-    const std::string name = "detect_ms_input_" + std::to_string(d->options().input_size);
-    RecordProperty(name, std::to_string(ms));
-    std::cout << name << " = " << ms << " ms (tiny model, 640x480 frame)\n";
-  }
+  // The same box on every call (the detector keeps no state between frames).
+  for (int run = 0; run < 3; ++run)
+    expect_boxes(det->detect(s.view()), {expected_box(30, 50, 180, score, 1.0, 0, 80, 640, 480)});
 }
 
 }  // namespace

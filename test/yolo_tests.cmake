@@ -6,5 +6,5 @@ if(TARGET fact_vision)
   target_compile_definitions(fact_yolo_tests PRIVATE
     FACT_MAKE_TINY_YOLO="${CMAKE_CURRENT_SOURCE_DIR}/make_tiny_yolo.py")
   target_link_libraries(fact_yolo_tests PRIVATE fact_vision GTest::gtest_main)
-  gtest_discover_tests(fact_yolo_tests DISCOVERY_TIMEOUT 30 PROPERTIES TIMEOUT 30)
+  fact_discover_tests(fact_yolo_tests 30)
 endif()

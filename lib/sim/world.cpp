@@ -320,7 +320,11 @@ std::string place_random_starts(World* w, uint64_t seed) {
   for (size_t i = 0; i < ids.size(); ++i) {
     bool ok = false;
     for (int t = 0; t < kTries && !ok; ++t) {
-      Eigen::Vector3d p(ux(rng), uy(rng), 0.0);
+      // y, then x: the order x86-64 drew them in (constructor arguments have no fixed order;
+      // GCC on aarch64 took x first, so the same seed placed other starts there).
+      const double y = uy(rng);
+      const double x = ux(rng);
+      const Eigen::Vector3d p(x, y, 0.0);
       if (!spot_ok(*w, p, placed)) continue;
       placed.push_back(DroneStart{ids[i], p, uyaw(rng)});
       ok = true;

@@ -15,6 +15,7 @@ if [ "$#" -ne 6 ]; then
   echo "usage: $0 SIMGEN X86_GOSSIP ARM64_GOSSIP INJECT CHECK WORK_DIR" >&2
   exit 2
 fi
+. "$(dirname "$0")/../lib.sh"  # wait_until, scaled (FACT_TEST_TIME_SCALE)
 SIMGEN=$1 X86=$2 ARM=$3 INJECT=$4 CHECK=$5 WORK=$6
 if [ -z "${FACT_GOSSIP_EXCHANGE_INNER:-}" ]; then
   netns_run="$(cd "$(dirname "$0")/../.." && pwd)/scripts/netns-run.sh"
@@ -38,17 +39,6 @@ fail() {
   echo "FAIL: $*"
   exit 1
 }
-# wait_until SECONDS CMD...: polls CMD every 0.1 s; fails after SECONDS.
-wait_until() {
-  limit=$1
-  shift
-  n=0
-  while ! "$@"; do
-    n=$((n + 1))
-    [ "$n" -ge $((limit * 10)) ] && return 1
-    sleep 0.1
-  done
-}
 has() { grep -a -q -- "$2" "$1" 2>/dev/null; }
 both_have() { has "$WORK/$1""0$2" "$3" && has "$WORK/$1""1$2" "$3"; }
 
@@ -58,14 +48,14 @@ start=$(date +%s.%N)
 echo "5b1e0c9a7d3f2e4a6b8c0d1e2f3a4b5c6d7e8f90123456789abcdef012345678" >"$WORK/swarm.key"
 
 for i in 0 1; do
-  timeout 60 lcm-logger -q -f --lcm-url="$URL" -c "FACT_SWARM_ROUNDS_$i|FACT_STATUS" "$WORK/rec$i.lcm" \
+  timeout "$(scaled 60)" lcm-logger -q -f --lcm-url="$URL" -c "FACT_SWARM_ROUNDS_$i|FACT_STATUS" "$WORK/rec$i.lcm" \
     2>"$WORK/logger$i.log" &
   PIDS="$PIDS $!"
 done
 gossip_pids=""
 i=0
 for gossip in "$X86" "$ARM"; do
-  timeout 60 "$gossip" --drone-id "$i" --lcm-url "$URL" --key-file "$WORK/swarm.key" --rounds-from-channel \
+  timeout "$(scaled 60)" "$gossip" --drone-id "$i" --lcm-url "$URL" --key-file "$WORK/swarm.key" --rounds-from-channel \
     --roster 0,1 --min-members 2 --summary-period 0.5 --settle 0.6 --status-period 0.25 2>"$WORK/gossip$i.log" &
   PIDS="$PIDS $!"
   gossip_pids="$gossip_pids $!"
@@ -75,7 +65,7 @@ wait_until 30 both_have gossip .log "started:" || fail "a fact-gossip did not st
 wait_until 30 both_have rec .lcm FACT_STATUS || fail "an lcm-logger recorded no FACT_STATUS"
 
 for i in 0 1; do
-  timeout 30 "$INJECT" --lcm-url "$URL" --drone-id "$i" --input "$WORK/rounds.json" --rounds "$ROUNDS" \
+  timeout "$(scaled 30)" "$INJECT" --lcm-url "$URL" --drone-id "$i" --input "$WORK/rounds.json" --rounds "$ROUNDS" \
     2>"$WORK/inject$i.log" || fail "fact_round_inject failed for drone $i"
 done
 wait_until 30 both_have gossip .log "complete: $ROUNDS round(s) of drones \[0,1\]" ||
