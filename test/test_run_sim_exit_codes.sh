@@ -16,6 +16,7 @@ if [ "$#" -ne 3 ]; then
   exit 2
 fi
 REPO=$1 BUILD=$2 OUT=$3
+. "$(dirname "$0")/lib.sh"
 rm -rf "$OUT"
 mkdir -p "$OUT"
 fail() {
@@ -45,14 +46,14 @@ run_sim killed --max-sim-time 60 &
 sim=$!
 log="$OUT/killed/logs/fact-solver-1.log"
 victim=""
-for _ in $(seq 100); do
-  [ -s "$log" ] && victim=$(for fd in /proc/[0-9]*/fd/1; do
+writer_of_log() {  # sets victim to the pid whose stdout is $log
+  [ -s "$log" ] || return 1
+  victim=$(for fd in /proc/[0-9]*/fd/1; do
     [ "$(readlink "$fd" 2>/dev/null)" = "$log" ] && { p=${fd#/proc/}; echo "${p%%/*}"; }
   done | head -n 1)
-  [ -n "$victim" ] && break
-  sleep 0.2
-done
-[ -n "$victim" ] || { kill "$sim"; fail "no process writes $log"; }
+  [ -n "$victim" ]
+}
+wait_until 20 writer_of_log || { kill "$sim"; fail "no process writes $log"; }
 [ "$(cat "/proc/$victim/comm")" = fact-solver ] || fail "pid $victim writing $log is $(cat "/proc/$victim/comm")"
 kill -KILL "$victim"
 rc=0
