@@ -23,9 +23,9 @@ struct Blob {
   double z() const { return depth_sum / area / 1000.0; }  // mean depth (m)
 };
 
-// Discontinuity threshold per depth (mm → mm): edge_min + edge_sigmas·√2·scale·σ_z(z), scale the
-// working image's noise relative to the raw depth's (see SegmentationOptions).
-// Kept per thread and rebuilt only when its inputs change (65536 entries).
+// Discontinuity threshold per depth (mm → mm): edge_min + edge_sigmas·√2·scale·σ_z(z), σ_z the raw
+// depth's noise (fx of the full-resolution frame), scale the working image's noise relative to it
+// (see SegmentationOptions). Kept per thread and rebuilt only when its inputs change (65536 entries).
 const std::vector<uint16_t>& edge_table(const SegmentationOptions& o, double fx, double scale) {
   thread_local std::vector<uint16_t> table;
   thread_local std::vector<double> key;
@@ -70,8 +70,8 @@ int find(std::vector<int>& parent, int i) {
   return i;
 }
 
-// Merges parts whose depths differ by less than the edge threshold and whose boxes are closer than
-// merge_gap (m, at their depth). Returns the groups.
+// Merges parts whose mean depths differ by less than merge_depth or the edge threshold and whose
+// boxes are closer than merge_gap (m, at their depth). Returns the groups.
 std::vector<Blob> merge_parts(const std::vector<Blob>& parts, const SegmentationOptions& o,
                               const std::vector<uint16_t>& edge, double fx) {
   const int n = static_cast<int>(parts.size());
@@ -82,7 +82,8 @@ std::vector<Blob> merge_parts(const std::vector<Blob>& parts, const Segmentation
       const Blob& a = parts[i];
       const Blob& b = parts[j];
       const double za = a.z(), zb = b.z(), zn = std::min(za, zb);
-      if (std::abs(za - zb) * 1000.0 > edge[static_cast<size_t>(std::min<double>(zn * 1000.0, edge.size() - 1))]) continue;
+      const double edge_mm = edge[static_cast<size_t>(std::min<double>(zn * 1000.0, edge.size() - 1))];
+      if (std::abs(za - zb) * 1000.0 > std::max(o.merge_depth * 1000.0, edge_mm)) continue;
       const double gap_px = o.merge_gap * fx / zn;
       const int du = std::max({0, a.u0 - b.u1 - 1, b.u0 - a.u1 - 1});
       const int dv = std::max({0, a.v0 - b.v1 - 1, b.v0 - a.v1 - 1});
@@ -176,11 +177,13 @@ std::vector<Blob> label_stats(const cv::Mat& labels, const cv::Mat& depth, int c
   return blobs;
 }
 
-// Whether a blob of height h_m (m) whose centre is at image row v (work pixels) is flat enough.
-bool flat_enough(double h_m, double v, const CameraIntrinsics& k, const SegmentationOptions& o) {
+// Whether a blob w_m wide and h_m high (m) whose centre is at image row v (work pixels) is flat
+// enough: no higher than a drone seen at that elevation, and no more than flat_height higher than
+// wide (a rotor disc is never seen higher than wide; slivers cut from a slanted surface are).
+bool flat_enough(double w_m, double h_m, double v, const CameraIntrinsics& k, const SegmentationOptions& o) {
   const double elevation = std::abs(std::atan2(k.cy - v, k.fy));
   const double a = std::min(1.5707963267948966, elevation + o.tilt_slack);
-  return h_m <= o.flat_height + o.diameter * std::sin(a);
+  return h_m <= o.flat_height + o.diameter * std::sin(a) && h_m <= w_m + o.flat_height;
 }
 
 }  // namespace
@@ -217,7 +220,7 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
   const double noise_scale = (f > 1 ? 0.7 : 1.0) * (o.median_filter ? 0.5 : 1.0);
   // Every valid depth takes part in the segmentation (a cut at max_depth would make noise islands
   // of a far wall look like near blobs); blobs beyond max_depth are dropped afterwards.
-  const std::vector<uint16_t>& edge = edge_table(o, k.fx, noise_scale);
+  const std::vector<uint16_t>& edge = edge_table(o, full.fx, noise_scale);
   surface_mask(work, edge, lo_mm, 65535, mask);
   const int count = cv::connectedComponents(mask, labels, 4, CV_32S);
   const std::vector<Blob> blobs = label_stats(labels, work, count);
@@ -236,8 +239,10 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
     const double z = g.z();
     const int w = g.u1 - g.u0 + 1, h = g.v1 - g.v0 + 1;
     const double wm = w * z / k.fx, hm = h * z / k.fy;
-    if (g.area * f * f < o.min_pixels || std::max(wm, hm) < o.min_size || wm > o.max_size || hm > o.max_size) continue;
-    if (!flat_enough(hm, 0.5 * (g.v0 + g.v1), k, o)) continue;
+    if (g.area * f * f < o.min_pixels || std::max(wm, hm) < o.min_size || wm < o.min_width || wm > o.max_size ||
+        hm > o.max_size)
+      continue;
+    if (!flat_enough(wm, hm, 0.5 * (g.v0 + g.v1), k, o)) continue;
     const int ring_px = std::max(2, static_cast<int>(std::lround(o.ring * k.fx / z)));
     const double far = far_fraction(work, g, ring_px, o.background_gap * 1000.0);
     const bool border = g.u0 == 0 || g.v0 == 0 || g.u1 == k.width - 1 || g.v1 == k.height - 1;
