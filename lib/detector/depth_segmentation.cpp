@@ -43,24 +43,29 @@ const std::vector<uint16_t>& edge_table(const SegmentationOptions& o, double fx,
 
 // 255 where a pixel has usable depth and no 4-neighbour is nearer than it by more than the edge
 // threshold (the far side of every discontinuity is cut away, so near objects keep their pixels).
+// Only the nearest neighbour of at least lo_mm needs testing: z − n grows and edge[n] shrinks as
+// n gets nearer. Neighbours below lo_mm (and 0, invalid) are moved to 0xFFFF by n − lo_mm
+// wrapping around, so one unsigned min finds the nearest usable one.
 void surface_mask(const cv::Mat& depth, const std::vector<uint16_t>& edge, int lo_mm, int hi_mm, cv::Mat& mask) {
   const int w = depth.cols, h = depth.rows;
   mask.create(h, w, CV_8U);
-  auto nearer = [&](uint16_t z, uint16_t n) { return n >= lo_mm && n < z && z - n > edge[n]; };
+  const uint16_t lo = static_cast<uint16_t>(lo_mm);
+  std::vector<uint16_t> nearest(static_cast<size_t>(w));  // per column: nearest usable neighbour − lo_mm
+  auto shifted = [lo](uint16_t z) { return static_cast<uint16_t>(z - lo); };
   for (int v = 0; v < h; ++v) {
     const uint16_t* row = depth.ptr<uint16_t>(v);
-    const uint16_t* up = v > 0 ? depth.ptr<uint16_t>(v - 1) : nullptr;
-    const uint16_t* down = v + 1 < h ? depth.ptr<uint16_t>(v + 1) : nullptr;
+    const uint16_t* up = depth.ptr<uint16_t>(v > 0 ? v - 1 : v);
+    const uint16_t* down = depth.ptr<uint16_t>(v + 1 < h ? v + 1 : v);
+    for (int u = 0; u < w; ++u) {
+      const uint16_t left = u > 0 ? row[u - 1] : row[u], right = u + 1 < w ? row[u + 1] : row[u];
+      nearest[u] = std::min(std::min(shifted(up[u]), shifted(down[u])), std::min(shifted(left), shifted(right)));
+    }
     uint8_t* out = mask.ptr<uint8_t>(v);
     for (int u = 0; u < w; ++u) {
       const uint16_t z = row[u];
-      bool keep = z >= lo_mm && z <= hi_mm;
-      if (keep) {
-        if ((u > 0 && nearer(z, row[u - 1])) || (u + 1 < w && nearer(z, row[u + 1])) || (up && nearer(z, up[u])) ||
-            (down && nearer(z, down[u])))
-          keep = false;
-      }
-      out[u] = keep ? 255 : 0;
+      const int n = nearest[u] + lo_mm;  // the nearest usable neighbour (≥ 65536 when none)
+      const bool cut = n < z && z - n > edge[static_cast<size_t>(n)];
+      out[u] = (z >= lo_mm && z <= hi_mm && !cut) ? 255 : 0;
     }
   }
 }
@@ -132,23 +137,24 @@ double far_fraction(const cv::Mat& depth, const Blob& b, int ring_px, double gap
   return total > 0 ? static_cast<double>(far) / total : 0.0;
 }
 
-// The f × f blocks of `raw` → their nearest valid depth (0 when none is valid).
+// The f × f blocks of `raw` → their nearest valid depth (0 when none is valid). Invalid 0 becomes
+// 0xFFFF by z − 1 wrapping around, so a plain min skips it, and + 1 turns it back into 0.
 void decimate_nearest(const cv::Mat& raw, int f, cv::Mat& out) {
   const int w = raw.cols / f, h = raw.rows / f;
   out.create(h, w, CV_16U);
+  std::vector<uint16_t> cols(static_cast<size_t>(raw.cols));  // per full-resolution column: min over the block's rows, − 1
   for (int v = 0; v < h; ++v) {
-    uint16_t* o = out.ptr<uint16_t>(v);
-    for (int u = 0; u < w; ++u) o[u] = 0xFFFF;
+    std::fill(cols.begin(), cols.end(), static_cast<uint16_t>(0xFFFF));
     for (int dv = 0; dv < f; ++dv) {
       const uint16_t* row = raw.ptr<uint16_t>(v * f + dv);
-      for (int u = 0; u < w; ++u)
-        for (int du = 0; du < f; ++du) {
-          const uint16_t z = row[u * f + du];
-          if (z != 0 && z < o[u]) o[u] = z;
-        }
+      for (int u = 0; u < raw.cols; ++u) cols[u] = std::min(cols[u], static_cast<uint16_t>(row[u] - 1));
     }
-    for (int u = 0; u < w; ++u)
-      if (o[u] == 0xFFFF) o[u] = 0;
+    uint16_t* o = out.ptr<uint16_t>(v);
+    for (int u = 0; u < w; ++u) {
+      uint16_t m = cols[static_cast<size_t>(u * f)];
+      for (int du = 1; du < f; ++du) m = std::min(m, cols[static_cast<size_t>(u * f + du)]);
+      o[u] = static_cast<uint16_t>(m + 1);
+    }
   }
 }
 
