@@ -23,9 +23,9 @@ struct Blob {
   double z() const { return depth_sum / area / 1000.0; }  // mean depth (m)
 };
 
-// Discontinuity threshold per depth (mm → mm): edge_min + edge_sigmas·√2·scale·σ_z(z), scale the
-// working image's noise relative to the raw depth's (see SegmentationOptions).
-// Kept per thread and rebuilt only when its inputs change (65536 entries).
+// Discontinuity threshold per depth (mm → mm): edge_min + edge_sigmas·√2·scale·σ_z(z), σ_z the raw
+// depth's noise (fx of the full-resolution frame), scale the working image's noise relative to it
+// (see SegmentationOptions). Kept per thread and rebuilt only when its inputs change (65536 entries).
 const std::vector<uint16_t>& edge_table(const SegmentationOptions& o, double fx, double scale) {
   thread_local std::vector<uint16_t> table;
   thread_local std::vector<double> key;
@@ -43,24 +43,29 @@ const std::vector<uint16_t>& edge_table(const SegmentationOptions& o, double fx,
 
 // 255 where a pixel has usable depth and no 4-neighbour is nearer than it by more than the edge
 // threshold (the far side of every discontinuity is cut away, so near objects keep their pixels).
+// Only the nearest neighbour of at least lo_mm needs testing: z − n grows and edge[n] shrinks as
+// n gets nearer. Neighbours below lo_mm (and 0, invalid) are moved to 0xFFFF by n − lo_mm
+// wrapping around, so one unsigned min finds the nearest usable one.
 void surface_mask(const cv::Mat& depth, const std::vector<uint16_t>& edge, int lo_mm, int hi_mm, cv::Mat& mask) {
   const int w = depth.cols, h = depth.rows;
   mask.create(h, w, CV_8U);
-  auto nearer = [&](uint16_t z, uint16_t n) { return n >= lo_mm && n < z && z - n > edge[n]; };
+  const uint16_t lo = static_cast<uint16_t>(lo_mm);
+  std::vector<uint16_t> nearest(static_cast<size_t>(w));  // per column: nearest usable neighbour − lo_mm
+  auto shifted = [lo](uint16_t z) { return static_cast<uint16_t>(z - lo); };
   for (int v = 0; v < h; ++v) {
     const uint16_t* row = depth.ptr<uint16_t>(v);
-    const uint16_t* up = v > 0 ? depth.ptr<uint16_t>(v - 1) : nullptr;
-    const uint16_t* down = v + 1 < h ? depth.ptr<uint16_t>(v + 1) : nullptr;
+    const uint16_t* up = depth.ptr<uint16_t>(v > 0 ? v - 1 : v);
+    const uint16_t* down = depth.ptr<uint16_t>(v + 1 < h ? v + 1 : v);
+    for (int u = 0; u < w; ++u) {
+      const uint16_t left = u > 0 ? row[u - 1] : row[u], right = u + 1 < w ? row[u + 1] : row[u];
+      nearest[u] = std::min(std::min(shifted(up[u]), shifted(down[u])), std::min(shifted(left), shifted(right)));
+    }
     uint8_t* out = mask.ptr<uint8_t>(v);
     for (int u = 0; u < w; ++u) {
       const uint16_t z = row[u];
-      bool keep = z >= lo_mm && z <= hi_mm;
-      if (keep) {
-        if ((u > 0 && nearer(z, row[u - 1])) || (u + 1 < w && nearer(z, row[u + 1])) || (up && nearer(z, up[u])) ||
-            (down && nearer(z, down[u])))
-          keep = false;
-      }
-      out[u] = keep ? 255 : 0;
+      const int n = nearest[u] + lo_mm;  // the nearest usable neighbour (≥ 65536 when none)
+      const bool cut = n < z && z - n > edge[static_cast<size_t>(n)];
+      out[u] = (z >= lo_mm && z <= hi_mm && !cut) ? 255 : 0;
     }
   }
 }
@@ -70,8 +75,8 @@ int find(std::vector<int>& parent, int i) {
   return i;
 }
 
-// Merges parts whose depths differ by less than the edge threshold and whose boxes are closer than
-// merge_gap (m, at their depth). Returns the groups.
+// Merges parts whose mean depths differ by less than merge_depth or the edge threshold and whose
+// boxes are closer than merge_gap (m, at their depth). Returns the groups.
 std::vector<Blob> merge_parts(const std::vector<Blob>& parts, const SegmentationOptions& o,
                               const std::vector<uint16_t>& edge, double fx) {
   const int n = static_cast<int>(parts.size());
@@ -82,7 +87,8 @@ std::vector<Blob> merge_parts(const std::vector<Blob>& parts, const Segmentation
       const Blob& a = parts[i];
       const Blob& b = parts[j];
       const double za = a.z(), zb = b.z(), zn = std::min(za, zb);
-      if (std::abs(za - zb) * 1000.0 > edge[static_cast<size_t>(std::min<double>(zn * 1000.0, edge.size() - 1))]) continue;
+      const double edge_mm = edge[static_cast<size_t>(std::min<double>(zn * 1000.0, edge.size() - 1))];
+      if (std::abs(za - zb) * 1000.0 > std::max(o.merge_depth * 1000.0, edge_mm)) continue;
       const double gap_px = o.merge_gap * fx / zn;
       const int du = std::max({0, a.u0 - b.u1 - 1, b.u0 - a.u1 - 1});
       const int dv = std::max({0, a.v0 - b.v1 - 1, b.v0 - a.v1 - 1});
@@ -131,23 +137,24 @@ double far_fraction(const cv::Mat& depth, const Blob& b, int ring_px, double gap
   return total > 0 ? static_cast<double>(far) / total : 0.0;
 }
 
-// The f × f blocks of `raw` → their nearest valid depth (0 when none is valid).
+// The f × f blocks of `raw` → their nearest valid depth (0 when none is valid). Invalid 0 becomes
+// 0xFFFF by z − 1 wrapping around, so a plain min skips it, and + 1 turns it back into 0.
 void decimate_nearest(const cv::Mat& raw, int f, cv::Mat& out) {
   const int w = raw.cols / f, h = raw.rows / f;
   out.create(h, w, CV_16U);
+  std::vector<uint16_t> cols(static_cast<size_t>(raw.cols));  // per full-resolution column: min over the block's rows, − 1
   for (int v = 0; v < h; ++v) {
-    uint16_t* o = out.ptr<uint16_t>(v);
-    for (int u = 0; u < w; ++u) o[u] = 0xFFFF;
+    std::fill(cols.begin(), cols.end(), static_cast<uint16_t>(0xFFFF));
     for (int dv = 0; dv < f; ++dv) {
       const uint16_t* row = raw.ptr<uint16_t>(v * f + dv);
-      for (int u = 0; u < w; ++u)
-        for (int du = 0; du < f; ++du) {
-          const uint16_t z = row[u * f + du];
-          if (z != 0 && z < o[u]) o[u] = z;
-        }
+      for (int u = 0; u < raw.cols; ++u) cols[u] = std::min(cols[u], static_cast<uint16_t>(row[u] - 1));
     }
-    for (int u = 0; u < w; ++u)
-      if (o[u] == 0xFFFF) o[u] = 0;
+    uint16_t* o = out.ptr<uint16_t>(v);
+    for (int u = 0; u < w; ++u) {
+      uint16_t m = cols[static_cast<size_t>(u * f)];
+      for (int du = 1; du < f; ++du) m = std::min(m, cols[static_cast<size_t>(u * f + du)]);
+      o[u] = static_cast<uint16_t>(m + 1);
+    }
   }
 }
 
@@ -176,11 +183,13 @@ std::vector<Blob> label_stats(const cv::Mat& labels, const cv::Mat& depth, int c
   return blobs;
 }
 
-// Whether a blob of height h_m (m) whose centre is at image row v (work pixels) is flat enough.
-bool flat_enough(double h_m, double v, const CameraIntrinsics& k, const SegmentationOptions& o) {
+// Whether a blob w_m wide and h_m high (m) whose centre is at image row v (work pixels) is flat
+// enough: no higher than a drone seen at that elevation, and no more than flat_height higher than
+// wide (a rotor disc is never seen higher than wide; slivers cut from a slanted surface are).
+bool flat_enough(double w_m, double h_m, double v, const CameraIntrinsics& k, const SegmentationOptions& o) {
   const double elevation = std::abs(std::atan2(k.cy - v, k.fy));
   const double a = std::min(1.5707963267948966, elevation + o.tilt_slack);
-  return h_m <= o.flat_height + o.diameter * std::sin(a);
+  return h_m <= o.flat_height + o.diameter * std::sin(a) && h_m <= w_m + o.flat_height;
 }
 
 }  // namespace
@@ -217,7 +226,7 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
   const double noise_scale = (f > 1 ? 0.7 : 1.0) * (o.median_filter ? 0.5 : 1.0);
   // Every valid depth takes part in the segmentation (a cut at max_depth would make noise islands
   // of a far wall look like near blobs); blobs beyond max_depth are dropped afterwards.
-  const std::vector<uint16_t>& edge = edge_table(o, k.fx, noise_scale);
+  const std::vector<uint16_t>& edge = edge_table(o, full.fx, noise_scale);
   surface_mask(work, edge, lo_mm, 65535, mask);
   const int count = cv::connectedComponents(mask, labels, 4, CV_32S);
   const std::vector<Blob> blobs = label_stats(labels, work, count);
@@ -236,8 +245,10 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
     const double z = g.z();
     const int w = g.u1 - g.u0 + 1, h = g.v1 - g.v0 + 1;
     const double wm = w * z / k.fx, hm = h * z / k.fy;
-    if (g.area * f * f < o.min_pixels || std::max(wm, hm) < o.min_size || wm > o.max_size || hm > o.max_size) continue;
-    if (!flat_enough(hm, 0.5 * (g.v0 + g.v1), k, o)) continue;
+    if (g.area * f * f < o.min_pixels || std::max(wm, hm) < o.min_size || wm < o.min_width || wm > o.max_size ||
+        hm > o.max_size)
+      continue;
+    if (!flat_enough(wm, hm, 0.5 * (g.v0 + g.v1), k, o)) continue;
     const int ring_px = std::max(2, static_cast<int>(std::lround(o.ring * k.fx / z)));
     const double far = far_fraction(work, g, ring_px, o.background_gap * 1000.0);
     const bool border = g.u0 == 0 || g.v0 == 0 || g.u1 == k.width - 1 || g.v1 == k.height - 1;

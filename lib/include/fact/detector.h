@@ -33,22 +33,30 @@ struct SegmentationOptions {
   bool median_filter = true;   // 3 × 3 median of the (decimated) depth before segmentation
   // Two 4-neighbour pixels belong to one surface unless their depths differ by more than
   // edge_min + edge_sigmas · √2 · σ_w(z), σ_w the working image's noise: σ_z (from `noise` and
-  // the frame's fx, at the nearer depth) × 0.7 after decimation (nearest of 4) × 0.5 after the median.
+  // the full-resolution frame's fx, at the nearer depth) × 0.7 after decimation (nearest of 4)
+  // × 0.5 after the median. On a flat wall at 6 m the largest neighbour difference of the working
+  // image is 0.25 m and the threshold 0.34 m (it was 0.60 m while σ_z came from the working
+  // image's fx, half the frame's, and a drone 0.6 m before a wall merged into it).
   double edge_min = 0.08;      // m
   double edge_sigmas = 3.5;    // noise standard deviations of a two-pixel difference
   DepthNoise noise;            // the camera's depth noise model (camera.h)
   // Physical size of a drone blob: its box's width and height at its depth (w·z/fx, h·z/fy).
   double min_size = 0.08;      // m: the larger side at least this
+  double min_width = 0.08;     // m: the width at least this (the hub alone is 0.12 m wide from any side)
   double max_size = 0.50;      // m: both sides at most this (the drone is 0.41 m across its rotors)
   // A drone is flat: seen at elevation angle e (from the box centre's image row, camera assumed
-  // near level) its height is at most flat_height + diameter · sin(min(90°, |e| + tilt_slack)).
+  // near level) its height is at most flat_height + diameter · sin(min(90°, |e| + tilt_slack)),
+  // and at most flat_height more than its width.
   double flat_height = 0.12;   // m: edge-on height (hub and rotors)
   double diameter = 0.45;      // m: rotor tip to rotor tip
   double tilt_slack = 0.35;    // rad: the target's and the observer's tilt, together
   int min_pixels = 4;          // full-resolution pixels in a blob (after merging its parts)
   int min_part_pixels = 2;     // working pixels; smaller components are noise, never a drone's part
-  // Parts of one drone (rotors, body) that the segmentation splits are merged when their depths
-  // differ by less than the edge threshold and their boxes are closer than merge_gap.
+  // Parts of one drone (rotors, body) that the segmentation splits are merged when their mean
+  // depths differ by less than merge_depth (or the edge threshold, if larger) and their boxes are
+  // closer than merge_gap. A drone's rotor centres are 0.28 m apart, so seen from any side its
+  // parts' depths differ by up to about that much.
+  double merge_depth = 0.30;   // m
   double merge_gap = 0.08;     // m (at the parts' depth)
   // Surroundings: a ring `ring` wide (m, at the blob's depth, at least 2 px) around the box; a
   // drone is nearer than most of it by at least `background_gap` (invalid pixels count as far).
