@@ -303,7 +303,8 @@ while :; do
   fi
   done_count=0
   for i in "${!pids[@]}"; do
-    [ "${names[$i]}" = live ] && continue
+    # The simulator is judged above, by its exit code: it may end at --max-sim-time in between.
+    [ "${names[$i]}" = live ] || [ "${pids[$i]}" = "$sim_pid" ] && continue
     running "${pids[$i]}" || { verdict="${names[$i]} exited early (see $out/logs/${names[$i]}.log)"; failed=1; break 2; }
   done
   for id in $ids; do grep -a -q "state: done" "$out/logs/fact-planner-$id.log" && done_count=$((done_count + 1)); done
