@@ -295,6 +295,16 @@ std::string fmt(const char* f, double a, double b = 0, double c = 0) {
   return buf;
 }
 
+// The run's first simulated time (µs): the first clock tick, else the first truth sample.
+double run_start_us(const RunLog& run) {
+  return run.first_clock >= 0 ? static_cast<double>(run.first_clock) : static_cast<double>(run.truth.front().utime);
+}
+
+// Simulated seconds from the run's start to its last clock tick (NaN without a clock).
+double sim_duration_s(const RunLog& run) {
+  return run.last_clock >= 0 ? (static_cast<double>(run.last_clock) - run_start_us(run)) * 1e-6 : NAN;
+}
+
 // A figure that was not judged (no drone to judge) is null in the JSON, never a zero.
 nlohmann::json judged(int drones, double value) { return drones > 0 ? nlohmann::json(value) : nlohmann::json(nullptr); }
 
@@ -313,8 +323,7 @@ int report_no_result(const Options& o, const RunLog& run, const fact::sim::World
     j["status"] = "no_result";
     j["drones_with_results"] = 0;
     j["time_to_certified_s"] = nullptr;
-    j["sim_duration_s"] = run.last_clock >= 0 && run.first_clock >= 0 ? nlohmann::json((run.last_clock - run.first_clock) * 1e-6)
-                                                                      : nlohmann::json(nullptr);
+    j["sim_duration_s"] = sim_duration_s(run);  // NaN is written as null
     j["drones"] = nlohmann::json::array();
     j["undecodable"] = run.undecodable;
     std::ofstream(o.json) << j.dump(2) << "\n";
@@ -401,9 +410,9 @@ int run_report(const Options& o) {
   const fact::report::ErrorSummary sum_now = fact::report::summarize(errors_now, res.reference);
   const auto sights = sightings(run, window, o.edge_gate);
   const auto edges = fact::report::mutual_edges(sights);
-  const double t0 = run.first_clock >= 0 ? static_cast<double>(run.first_clock) : static_cast<double>(run.truth.front().utime);
+  const double t0 = run_start_us(run);
   const double time_to_result = (static_cast<double>(result->at) - t0) * 1e-6;
-  const double sim_duration = run.last_clock >= 0 ? (static_cast<double>(run.last_clock) - t0) * 1e-6 : NAN;
+  const double sim_duration = sim_duration_s(run);
   const bool within = sum.yaw_max <= o.yaw_bound && sum.position_max <= o.position_bound &&
                       errors.size() == res.drones.size();
   const bool certified = all_certified && res.status == "certified";
