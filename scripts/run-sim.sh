@@ -269,13 +269,11 @@ echo "== $n drones (${ids// /,}), world $(basename "$world"), seed $seed, $mode 
 # Live: one line per event from every app's log. $! is tail itself, so stopping it ends the
 # filter behind it too.
 if [ "$quiet" = 0 ]; then
-  cd "$out/logs"
-  tail --pid=$$ -q -n +1 -F fact-*.log 2>/dev/null > >(
+  tail --pid=$$ -q -n +1 -F "$out"/logs/fact-*.log 2>/dev/null > >(
     grep --line-buffered -E "state: |own round [0-9]+ closed|estimate: |error|failsafe|lockstep:|exit:|sim t = [0-9]+0\.0 s|took off|armed|OFFBOARD" |
     sed -u -E 's/^[0-9T:.-]+Z //') &
   pids+=("$!")
   names+=("live")
-  cd - >/dev/null
 fi
 
 # running PID: the process has not exited. (Bash reaps its children as they exit, so an exited
