@@ -265,6 +265,7 @@ class Generator {
 
   void move_drones();
   void step_drift();
+  void drifted_frame(int i, double* yaw, Eigen::Vector3d* origin) const;
   Round observe(int k, std::vector<std::vector<int>>* targets);
   DroneRound observe_drone(int i, std::vector<int>* targets);
   bool visible(int i, int j) const;
@@ -427,9 +428,17 @@ bool Generator::visible(int i, int j) const {
   return std::none_of(obstacles_.begin(), obstacles_.end(), [&](const Obstacle& ob) { return segment_hits(a, b, ob); });
 }
 
-// What drone i reports in f_i (with its drift): its position, (m).
+// What drone i reports in f_i (with its drift): its position, (m). The drift moves the whole
+// frame: its yaw turns positions as well as headings, as a drifting VIO's does.
 Eigen::Vector3d Generator::reported_position(int i) const {
-  return rotate_z(-frame_yaw_[i], position_[i] - origin_[i]) + drift_position_[i];
+  return rotate_z(drift_yaw_[i], rotate_z(-frame_yaw_[i], position_[i] - origin_[i])) + drift_position_[i];
+}
+
+// The frame drone i's odometry is in while its drift is what it is now: a world point x has
+// odometry coordinates R(−yaw)(x − origin), with yaw = θ − δ_yaw and origin = o − R(yaw) δ_p.
+void Generator::drifted_frame(int i, double* yaw, Eigen::Vector3d* origin) const {
+  *yaw = wrap(frame_yaw_[i] - drift_yaw_[i]);
+  *origin = origin_[i] - rotate_z(*yaw, drift_position_[i]);
 }
 
 // A detection as drone i reports it, made while its world heading was `heading` (rad).
@@ -539,6 +548,10 @@ Scenario Generator::run() {
       step_drift();
     }
     s.truth.positions.push_back(position_);
+    s.truth.drifted_yaw.emplace_back(position_.size());
+    s.truth.drifted_origin.emplace_back(position_.size());
+    for (std::size_t i = 0; i < position_.size(); ++i)
+      drifted_frame(static_cast<int>(i), &s.truth.drifted_yaw.back()[i], &s.truth.drifted_origin.back()[i]);
     s.truth.targets.emplace_back();
     s.rounds.rounds.push_back(observe(k, &s.truth.targets.back()));
   }
@@ -596,12 +609,15 @@ Scenario generate_scenario(const SimOptions& options) {
   return Generator(options).run();
 }
 
-std::vector<TruePose> true_poses(const Truth& truth, int reference_id) {
+namespace {
+
+std::vector<TruePose> relative_poses(const Truth& truth, int reference_id, const std::vector<double>& frame_yaw,
+                                     const std::vector<Eigen::Vector3d>& frame_origin) {
   const std::size_t n = truth.ids.size();
-  if (truth.frame_yaw.size() != n || truth.frame_origin.size() != n)
+  if (frame_yaw.size() != n || frame_origin.size() != n)
     throw std::invalid_argument("true_poses: truth has " + std::to_string(n) + " ids but " +
-                                std::to_string(truth.frame_yaw.size()) + " frame_yaw and " +
-                                std::to_string(truth.frame_origin.size()) + " frame_origin entries");
+                                std::to_string(frame_yaw.size()) + " frame yaws and " +
+                                std::to_string(frame_origin.size()) + " frame origins");
   const auto ref = std::find(truth.ids.begin(), truth.ids.end(), reference_id);
   if (ref == truth.ids.end())
     throw std::invalid_argument("true_poses: reference id " + std::to_string(reference_id) + " is not in truth.ids");
@@ -610,11 +626,25 @@ std::vector<TruePose> true_poses(const Truth& truth, int reference_id) {
   for (std::size_t i = 0; i < n; ++i) {
     TruePose p;
     p.id = truth.ids[i];
-    p.yaw = wrap(truth.frame_yaw[i] - truth.frame_yaw[r]);
-    p.position = rotate_z(-truth.frame_yaw[r], truth.frame_origin[i] - truth.frame_origin[r]);
+    p.yaw = wrap(frame_yaw[i] - frame_yaw[r]);
+    p.position = rotate_z(-frame_yaw[r], frame_origin[i] - frame_origin[r]);
     poses.push_back(p);
   }
   return poses;
+}
+
+}  // namespace
+
+std::vector<TruePose> true_poses(const Truth& truth, int reference_id) {
+  return relative_poses(truth, reference_id, truth.frame_yaw, truth.frame_origin);
+}
+
+std::vector<TruePose> true_poses_in_round(const Truth& truth, int reference_id, int round) {
+  if (round < 0 || static_cast<std::size_t>(round) >= truth.drifted_yaw.size() ||
+      truth.drifted_origin.size() != truth.drifted_yaw.size())
+    throw std::invalid_argument("true_poses_in_round: round " + std::to_string(round) + " is not in the truth (" +
+                                std::to_string(truth.drifted_yaw.size()) + " rounds)");
+  return relative_poses(truth, reference_id, truth.drifted_yaw[round], truth.drifted_origin[round]);
 }
 
 }  // namespace fact

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace fact {
@@ -16,9 +17,11 @@ struct Errors {
   int resolved = 0;
 };
 
-Errors errors_against_truth(const Estimate& e, const Truth& truth) {
+// Against the frames the odometry was in during `round` (−1: the frames without drift).
+Errors errors_against_truth(const Estimate& e, const Truth& truth, int round = -1) {
   Errors out;
-  const std::vector<TruePose> truth_poses = true_poses(truth, e.reference);
+  const std::vector<TruePose> truth_poses =
+      round < 0 ? true_poses(truth, e.reference) : true_poses_in_round(truth, e.reference, round);
   for (const DronePose& d : e.drones) {
     if (!d.resolved) continue;
     ++out.resolved;
@@ -49,6 +52,8 @@ NoiseModel exact_sensor() {
   n.bearing = 0.0005;
   n.odometry = 0.001;
   n.odometry_yaw = 0.0005;
+  n.odometry_walk = 0;
+  n.odometry_yaw_walk = 0;
   return n;
 }
 
@@ -193,6 +198,50 @@ TEST(Estimator, NeverCertifiesWrongWithFalsePositivesMissesAndObstacles) {
     EXPECT_LT(err.position, 0.3) << "seed " << seed;
   }
   EXPECT_GE(certified, 6);  // most of them certify; the rate itself is a benchmark figure
+}
+
+// Long sessions with VIO drift (the default model's walk per round): every estimate from the
+// first K rounds, K = 1 … 10, that certifies is right about the frames of its latest round,
+// and the result tracks them rather than the frames of the first round.
+TEST(Estimator, DriftOverLongSessionsNeverCertifiesOldFrames) {
+  int certified = 0, late = 0;
+  double worst_yaw = 0, worst_position = 0;
+  for (std::uint64_t seed = 1; seed <= 16; ++seed) {
+    SimOptions o = swarm(4, 10, 300 + seed);
+    o.noise = NoiseKind::depth;
+    o.range_limit = 6;
+    o.obstacles = 2;
+    o.miss_rate = 0.3;  // sparse sightings: sessions run long
+    o.drift_yaw = 0.006;
+    o.drift_position = 0.03;
+    const Scenario s = generate_scenario(o);
+    for (int k = 1; k <= o.rounds; ++k) {
+      const Estimate e = run(s, Mode::automatic, k, NoiseModel{});
+      if (!e.certified()) continue;
+      ++certified;
+      late += k >= 5;
+      const Errors err = errors_against_truth(e, s.truth, k - 1);
+      worst_yaw = std::max(worst_yaw, err.yaw);
+      worst_position = std::max(worst_position, err.position);
+      EXPECT_LT(err.yaw, 0.05) << "seed " << seed << ", " << k << " rounds";
+      EXPECT_LT(err.position, 0.2) << "seed " << seed << ", " << k << " rounds";
+    }
+  }
+  EXPECT_GE(late, 10) << "too few long sessions certified to test drift";
+  std::printf("drift: %d certified estimates (%d from >= 5 rounds), worst yaw %.4f rad, position %.3f m\n", certified,
+              late, worst_yaw, worst_position);
+}
+
+TEST(Estimator, WindowUsesOnlyTheLatestRounds) {
+  const Scenario s = generate_scenario(swarm(4, 5, 8));
+  EstimateOptions o;
+  o.noise = exact_sensor();
+  o.window = 2;
+  const Estimate e = estimate_poses(s.rounds, o);
+  EXPECT_EQ(e.rounds_used, 2);
+  expect_exact(e, s, 4);
+  o.window = -1;
+  EXPECT_EQ(estimate_poses(s.rounds, o).status, EstimateStatus::invalid_input);
 }
 
 // --- invalid input -------------------------------------------------------------------------

@@ -16,6 +16,7 @@ namespace fact::app {
 struct EstimatorFlags {
   std::string mode = "auto";
   int rounds = 0;
+  int window = 0;
   int reference = -1;
   EstimateOptions options;  // noise model and certification limits, filled in place
 };
@@ -26,6 +27,9 @@ inline void add_estimator_flags(CLI::App& app, EstimatorFlags& f) {
       ->type_name("MODE")
       ->capture_default_str();
   app.add_option("--rounds", f.rounds, "Use only the first K rounds (0 = all)")->type_name("K")->capture_default_str();
+  app.add_option("--window", f.window, "Of those rounds, use only the latest W (0 = all); bounds the VIO drift they span")
+      ->type_name("W")
+      ->capture_default_str();
   app.add_option("--reference", f.reference, "Id of the reference drone (-1 = lowest id)")
       ->type_name("ID")
       ->capture_default_str();
@@ -37,10 +41,18 @@ inline void add_estimator_flags(CLI::App& app, EstimatorFlags& f) {
       ->type_name("1/M")
       ->capture_default_str();
   app.add_option("--noise-bearing", n.bearing, "Bearing sigma (rad)")->type_name("RAD")->capture_default_str();
-  app.add_option("--noise-odometry", n.odometry, "VIO position error within a session, sigma in m")
+  app.add_option("--noise-odometry", n.odometry, "VIO position error within a round, sigma in m")
       ->type_name("M")
       ->capture_default_str();
-  app.add_option("--noise-odometry-yaw", n.odometry_yaw, "VIO yaw error within a session, sigma in rad")
+  app.add_option("--noise-odometry-yaw", n.odometry_yaw, "VIO yaw error within a round, sigma in rad")
+      ->type_name("RAD")
+      ->capture_default_str();
+  app.add_option("--noise-odometry-walk", n.odometry_walk,
+                 "VIO position random walk between rounds, sigma in m per sqrt(round)")
+      ->type_name("M")
+      ->capture_default_str();
+  app.add_option("--noise-odometry-yaw-walk", n.odometry_yaw_walk,
+                 "VIO yaw random walk between rounds, sigma in rad per sqrt(round)")
       ->type_name("RAD")
       ->capture_default_str();
   app.add_option("--gate", n.gate, "A residual within gate x sigma counts as consistent (sigmas, > 0)")
@@ -68,6 +80,8 @@ inline EstimateOptions estimator_options(const EstimatorFlags& f) {
   if (f.rounds < 0)
     throw std::invalid_argument("--rounds: expected a number of rounds >= 0 (0 = all), got " +
                                 std::to_string(f.rounds));
+  if (f.window < 0)
+    throw std::invalid_argument("--window: expected a number of rounds >= 0 (0 = all), got " + std::to_string(f.window));
   if (f.reference < -1)
     throw std::invalid_argument("--reference: expected a drone id >= 0 (or -1 = lowest), got " +
                                 std::to_string(f.reference));
@@ -84,11 +98,14 @@ inline EstimateOptions estimator_options(const EstimatorFlags& f) {
   check("--noise-bearing", n.bearing, false);
   check("--noise-odometry", n.odometry, false);
   check("--noise-odometry-yaw", n.odometry_yaw, false);
+  check("--noise-odometry-walk", n.odometry_walk, false);
+  check("--noise-odometry-yaw-walk", n.odometry_yaw_walk, false);
   check("--gate", n.gate, true);
   check("--max-yaw-sigma", o.max_yaw_sigma, true);
   check("--max-position-sigma", o.max_position_sigma, true);
   check("--min-separation", o.min_separation, false);
   o.max_rounds = f.rounds;
+  o.window = f.window;
   o.reference = f.reference;
   return o;
 }

@@ -46,10 +46,12 @@ void add_flags(CLI::App& app, Flags& f) {
       ->capture_default_str();
   fact::app::add_estimator_flags(app, f.estimator);
   app.footer(
-      "Noise model, for a detected centre at range d metres: along the ray sigma^2 = floor^2 +\n"
-      "(linear*d + quadratic*d^2)^2 + odometry^2; across it sigma^2 = floor^2 + (bearing*d)^2 +\n"
-      "odometry^2 + (odometry_yaw*d)^2. Poses are the yaw (rad) and origin (m) of each drone's\n"
-      "odometry frame in the reference drone's frame.\n"
+      "Noise model, for a detected centre at range d metres seen a rounds before the latest round\n"
+      "used: along the ray sigma^2 = floor^2 + (linear*d + quadratic*d^2)^2 + odom^2; across it\n"
+      "sigma^2 = floor^2 + (bearing*d)^2 + odom^2 + (odom_yaw*d)^2, where odom^2 = odometry^2 +\n"
+      "a*odometry_walk^2 and odom_yaw^2 = odometry_yaw^2 + a*odometry_yaw_walk^2. Poses are the yaw\n"
+      "(rad) and origin (m) of each drone's odometry frame in the reference drone's frame, as\n"
+      "during the latest round used.\n"
       "Exit codes: 0 certified; 3 not certified (result written); 2 invalid input: bad flag,\n"
       "unreadable or malformed input, or an invalid_input result (result written); 1 output not\n"
       "written or internal error. One log line goes to stderr.");

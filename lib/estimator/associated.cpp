@@ -495,7 +495,7 @@ Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) 
   PointSets points(p.rounds(), std::vector<std::vector<Point>>(p.drones()));
   for (int k = 0; k < p.rounds(); ++k)
     for (int i = 0; i < p.drones(); ++i)
-      if (p.views[k][i].present) points[k][i] = points_of(p.views[k][i], p.noise.odometry);
+      if (p.views[k][i].present) points[k][i] = points_of(p.views[k][i], p.odometry_sd[k]);
   std::vector<Edge> edges;
   for (int i = 0; i < p.drones(); ++i)
     for (int j = i + 1; j < p.drones(); ++j) edges.push_back(judge_pair(p, points, i, j));

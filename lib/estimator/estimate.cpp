@@ -42,6 +42,14 @@ double NoiseModel::sigma(double range) const {
   return std::sqrt(floor * floor + along * along + across * across);
 }
 
+double NoiseModel::odometry_at(int age) const {
+  return std::sqrt(odometry * odometry + std::max(age, 0) * odometry_walk * odometry_walk);
+}
+
+double NoiseModel::odometry_yaw_at(int age) const {
+  return std::sqrt(odometry_yaw * odometry_yaw + std::max(age, 0) * odometry_yaw_walk * odometry_yaw_walk);
+}
+
 namespace estimator {
 
 Eigen::Matrix3d yaw_rotation(double yaw) {
@@ -57,15 +65,16 @@ double wrap_angle(double a) {
 }
 
 // Covariance (m², f_i axes) of a detected centre at `direction` (m, f_i axes): range noise along
-// the ray, bearing noise across it, a centring floor, and the odometry's position and yaw error.
-// Also gives the largest σ (m).
-Eigen::Matrix3d detection_covariance(const NoiseModel& n, const Eigen::Vector3d& direction, double* largest_sigma) {
+// the ray, bearing noise across it, a centring floor, and the odometry's position and yaw error
+// (σ odometry m, odometry_yaw rad, already grown by the detection's age). Also gives the largest σ (m).
+Eigen::Matrix3d detection_covariance(const NoiseModel& n, double odometry, double odometry_yaw,
+                                     const Eigen::Vector3d& direction, double* largest_sigma) {
   const double d = direction.norm();
   const Eigen::Vector3d u = direction / d;
   const double range_sd = n.linear * d + n.quadratic * d * d;
-  const double along = n.floor * n.floor + range_sd * range_sd + n.odometry * n.odometry;
-  const double across = n.floor * n.floor + std::pow(n.bearing * d, 2) + n.odometry * n.odometry +
-                        std::pow(n.odometry_yaw * d, 2);
+  const double along = n.floor * n.floor + range_sd * range_sd + odometry * odometry;
+  const double across = n.floor * n.floor + std::pow(n.bearing * d, 2) + odometry * odometry +
+                        std::pow(odometry_yaw * d, 2);
   const Eigen::Matrix3d ray = u * u.transpose();
   *largest_sigma = std::sqrt(std::max(along, across));
   return along * ray + across * (Eigen::Matrix3d::Identity() - ray);
@@ -77,7 +86,11 @@ Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel
   std::sort(p.ids.begin(), p.ids.end());
   p.reference = reference_index;
   p.noise = noise;
+  const int latest = static_cast<int>(rounds.rounds.size()) - 1;
   for (const Round& round : rounds.rounds) {
+    const int age = latest - static_cast<int>(p.views.size());  // rounds before the latest
+    p.odometry_sd.push_back(noise.odometry_at(age));
+    p.odometry_yaw_sd.push_back(noise.odometry_yaw_at(age));
     std::vector<DroneView> views(p.ids.size());
     for (const auto& [id, drone] : round.drones) {
       const int i = static_cast<int>(std::lower_bound(p.ids.begin(), p.ids.end(), id) - p.ids.begin());
@@ -91,7 +104,7 @@ Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel
         d.direction = yaw_rotation(obs.odom_yaw) * obs.vector;
         d.target = d.observer + d.direction;
         d.range = obs.vector.norm();
-        d.cov = detection_covariance(noise, d.direction, &d.sigma);
+        d.cov = detection_covariance(noise, p.odometry_sd.back(), p.odometry_yaw_sd.back(), d.direction, &d.sigma);
         v.detections.push_back(d);
       }
     }
@@ -158,7 +171,8 @@ Estimate invalid(const Rounds& rounds, const std::string& reason) {
 std::string check_noise(const NoiseModel& n) {
   const std::pair<const char*, double> fields[] = {
       {"floor", n.floor},       {"linear", n.linear},         {"quadratic", n.quadratic}, {"bearing", n.bearing},
-      {"odometry", n.odometry}, {"odometry_yaw", n.odometry_yaw}, {"gate", n.gate}};
+      {"odometry", n.odometry}, {"odometry_yaw", n.odometry_yaw}, {"odometry_walk", n.odometry_walk},
+      {"odometry_yaw_walk", n.odometry_yaw_walk}, {"gate", n.gate}};
   for (const auto& [name, v] : fields) {
     if (!std::isfinite(v) || v < 0) {
       std::ostringstream s;
@@ -212,6 +226,8 @@ Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options) {
   if (std::string e = validate_rounds(rounds); !e.empty()) return invalid(rounds, e);
   if (options.max_rounds < 0)
     return invalid(rounds, "max_rounds is " + std::to_string(options.max_rounds) + " (must be >= 0)");
+  if (options.window < 0)
+    return invalid(rounds, "window is " + std::to_string(options.window) + " (must be >= 0)");
   if (std::string e = check_noise(options.noise); !e.empty()) return invalid(rounds, e);
   if (!(options.max_yaw_sigma > 0) || !std::isfinite(options.max_yaw_sigma))
     return invalid(rounds, "max_yaw_sigma is " + std::to_string(options.max_yaw_sigma) + " (must be finite and > 0)");
@@ -220,7 +236,7 @@ Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options) {
                    "max_position_sigma is " + std::to_string(options.max_position_sigma) + " (must be finite and > 0)");
   if (!std::isfinite(options.min_separation) || options.min_separation < 0)
     return invalid(rounds, "min_separation is " + std::to_string(options.min_separation) + " (must be finite and >= 0)");
-  const Rounds used = first_rounds(rounds, options.max_rounds);
+  const Rounds used = last_rounds(first_rounds(rounds, options.max_rounds), options.window);
   std::vector<int> ids = rounds.drones;
   std::sort(ids.begin(), ids.end());
   const int reference_id = options.reference < 0 ? ids.front() : options.reference;

@@ -40,6 +40,9 @@ struct Problem {
   int reference = 0;                           // index of the reference drone
   std::vector<std::vector<DroneView>> views;   // K × N
   NoiseModel noise;
+  // VIO error of round k's odometry against the frames of the latest round, grown by the
+  // random walk over the rounds between (see NoiseModel): σ in m and rad, K each.
+  std::vector<double> odometry_sd, odometry_yaw_sd;
   double min_separation = 0.3;                 // m, see EstimateOptions
   double max_yaw_sigma = 0.025;                // rad, see EstimateOptions
   double max_position_sigma = 0.08;            // m, see EstimateOptions

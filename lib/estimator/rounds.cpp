@@ -89,4 +89,13 @@ Rounds first_rounds(const Rounds& rounds, int count) {
   return out;
 }
 
+Rounds last_rounds(const Rounds& rounds, int count) {
+  Rounds out;
+  out.drones = rounds.drones;
+  const size_t n = (count <= 0 || static_cast<size_t>(count) > rounds.rounds.size()) ? rounds.rounds.size()
+                                                                                    : static_cast<size_t>(count);
+  out.rounds.assign(rounds.rounds.end() - n, rounds.rounds.end());
+  return out;
+}
+
 }  // namespace fact

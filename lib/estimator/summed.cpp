@@ -78,7 +78,7 @@ std::vector<std::pair<Ref, Ref>> match_round(const Problem& p, int k, const std:
 void add_pair(const Problem& p, int k, const Ref& a, const Ref& b, std::vector<Correspondence>* out) {
   const Detection& da = p.views[k][a.drone].detections[a.index];
   const Detection& db = p.views[k][b.drone].detections[b.index];
-  const Eigen::Matrix3d own = std::pow(p.noise.odometry, 2) * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d own = std::pow(p.odometry_sd[k], 2) * Eigen::Matrix3d::Identity();
   out->push_back({a.drone, b.drone, da.target, db.observer, da.sigma, da.cov, own});
   out->push_back({a.drone, b.drone, da.observer, db.target, db.sigma, own, db.cov});
 }

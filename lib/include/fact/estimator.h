@@ -32,27 +32,38 @@ enum class EstimateStatus {
 };
 const char* to_string(EstimateStatus s);  // "certified", "ambiguous", "invalid_input"
 
-// The sensor's noise. A detected centre at range d has covariance σ_along² along the ray and
-// σ_across² across it (both axes), in the observer's frame:
-//   σ_along²  = floor² + (linear·d + quadratic·d²)² + odometry²
-//   σ_across² = floor² + (bearing·d)² + odometry² + (odometry_yaw·d)²
+// The sensor's noise. A detected centre at range d, seen a rounds before the latest round used,
+// has covariance σ_along² along the ray and σ_across² across it (both axes), in the observer's
+// frame:
+//   σ_along²  = floor² + (linear·d + quadratic·d²)² + odom(a)²
+//   σ_across² = floor² + (bearing·d)² + odom(a)² + (odom_yaw(a)·d)²
+//   odom(a)²     = odometry²     + a·odometry_walk²       (VIO position error, m²)
+//   odom_yaw(a)² = odometry_yaw² + a·odometry_yaw_walk²   (VIO yaw error, rad²)
+// The VIO frames drift, so the estimate is of the frames during the latest round: an older
+// detection is further from them by a random walk per round, and weighs less.
 // It is a calibration of the camera and the VIO, not knowledge of the scene. Defaults: a
-// D430-class depth camera with a VIO that drifts about 2 cm and 0.01 rad within a session.
+// D430-class depth camera with a VIO that drifts about 2 cm and 0.01 rad within a round and
+// walks about 3 cm and 0.006 rad per √round (a round, a spin and a move, takes about 10 s).
 // sigma(d) is the isotropic summary sqrt(floor² + along_sensor² + across_sensor²).
 struct NoiseModel {
   double floor = 0.03;        // m, detector centring error at any range
   double linear = 0.0;        // range σ per metre of range (the paper's model: 0.05 per axis)
   double quadratic = 0.008;   // range σ per metre² (stereo depth: c·d²)
   double bearing = 0.005;     // rad, bearing σ
-  double odometry = 0.02;     // m, VIO position error within a session of rounds
-  double odometry_yaw = 0.01; // rad, VIO yaw error within a session of rounds
+  double odometry = 0.02;     // m, VIO position error within a round
+  double odometry_yaw = 0.01; // rad, VIO yaw error within a round
+  double odometry_walk = 0.03;       // m per √round, VIO position random walk between rounds
+  double odometry_yaw_walk = 0.006;  // rad per √round, VIO yaw random walk between rounds
   double gate = 4.0;          // a residual within gate·σ counts as consistent
   double sigma(double range) const;
+  double odometry_at(int age) const;      // odom(a), m
+  double odometry_yaw_at(int age) const;  // odom_yaw(a), rad
 };
 
 struct EstimateOptions {
   Mode mode = Mode::automatic;
   int max_rounds = 0;   // use only the first K rounds (0 = all)
+  int window = 0;       // of those, use only the latest W (0 = all): bounds the drift they span
   int reference = -1;   // id of the reference drone (−1 = lowest id)
   NoiseModel noise;
   // Two drones are never closer than this (m, centre to centre). A pose that would put two drones

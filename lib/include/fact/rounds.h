@@ -47,5 +47,7 @@ std::string validate_rounds(const Rounds& rounds);
 
 // The first `count` rounds (all of them when count <= 0 or count exceeds the number).
 Rounds first_rounds(const Rounds& rounds, int count);
+// The latest `count` rounds (all of them when count <= 0 or count exceeds the number).
+Rounds last_rounds(const Rounds& rounds, int count);
 
 }  // namespace fact

@@ -100,6 +100,10 @@ struct Truth {
   std::vector<double> frame_yaw;                 // yaw of f_i in the world, per drone (rad)
   std::vector<Eigen::Vector3d> frame_origin;     // origin of f_i in the world, per drone (m)
   std::vector<std::vector<Eigen::Vector3d>> positions;  // positions[k][i]: world centre in round k
+  // The frames the drifting odometry is in during round k: drifted_yaw[k][i] (rad) and
+  // drifted_origin[k][i] (m, world). Without drift they equal frame_yaw and frame_origin.
+  std::vector<std::vector<double>> drifted_yaw;
+  std::vector<std::vector<Eigen::Vector3d>> drifted_origin;
   // targets[k][i][o]: id seen by observation o of drone i in round k, −1 = false positive
   std::vector<std::vector<std::vector<int>>> targets;
   std::vector<Obstacle> obstacles;               // the given obstacles, then the random ones
@@ -124,5 +128,8 @@ struct TruePose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
 };
 std::vector<TruePose> true_poses(const Truth& truth, int reference_id);
+// The same for the drifted frames of round k (what an estimate from rounds up to k describes).
+// Throws std::invalid_argument for a round not in the truth.
+std::vector<TruePose> true_poses_in_round(const Truth& truth, int reference_id, int round);
 
 }  // namespace fact
