@@ -749,6 +749,8 @@ std::string check_builder_options(const BuilderOptions& o) {
   if (o.max_tracks < 0) return "max_tracks is negative";
   if (o.max_odometry < 2) return "max_odometry must be ≥ 2";
   if (o.max_detections < 1) return "max_detections must be ≥ 1";
+  if (!(o.max_speed >= 0) || !std::isfinite(o.max_speed)) return "max_speed must be finite and ≥ 0";
+  if (o.max_speed_window_us <= 0) return "max_speed_window must be > 0";
   return "";
 }
 
@@ -759,6 +761,7 @@ std::vector<std::pair<std::string, int64_t>> BuilderCounters::list() const {
           {"rejected_detections", rejected_detections},
           {"late_detections", late_detections},
           {"unmatched_detections", unmatched_detections},
+          {"moves", moves},
           {"dropped_history", dropped_history},
           {"dropped_tracks", dropped_tracks},
           {"rounds_built", rounds}};
@@ -798,7 +801,13 @@ std::string RoundBuilder::add_odometry(int64_t utime, const Eigen::Vector3d& pos
     started_ = true;
     open_start_ = utime;
     min_yaw_ = max_yaw_ = yaw;
+  } else if (opt_.round_period_us == 0 && opt_.max_speed > 0 && moving()) {
+    counters_.moves += !moving_;  // once per move, when it starts
+    moving_ = true;
+    open_start_ = utime;  // the open round restarts where the drone stops
+    min_yaw_ = max_yaw_ = yaw;
   } else {
+    moving_ = false;
     min_yaw_ = std::min(min_yaw_, yaw);
     max_yaw_ = std::max(max_yaw_, yaw);
   }
@@ -809,6 +818,17 @@ std::string RoundBuilder::add_odometry(int64_t utime, const Eigen::Vector3d& pos
   }
   trim();
   return "";
+}
+
+// True when the newest odometry moved faster than max_speed over the last max_speed_window.
+bool RoundBuilder::moving() const {
+  const Odo& last = odo_.back();
+  for (auto it = odo_.rbegin() + 1; it != odo_.rend(); ++it) {
+    if (last.t - it->t > opt_.max_odometry_gap_us) return false;  // a gap: no speed to measure
+    if (last.t - it->t >= opt_.max_speed_window_us)
+      return (last.p - it->p).norm() > opt_.max_speed * static_cast<double>(last.t - it->t) * 1e-6;
+  }
+  return false;
 }
 
 void RoundBuilder::close_if_spun() {
@@ -905,8 +925,10 @@ void RoundBuilder::finalize(const Closed& c) {
 
 void RoundBuilder::trim() {
   const int64_t keep_from = closing_.empty() ? open_start_ : std::min(open_start_, closing_.front().t0);
-  // Keep the last sample at or before keep_from (for interpolation) and everything after.
-  while (odo_.size() >= 2 && odo_[1].t <= keep_from) odo_.pop_front();
+  // Keep the last sample at or before keep_from (for interpolation) and everything after, and
+  // the odometry of the last max_speed_window (to tell a move).
+  const int64_t keep_odometry_from = std::min(keep_from, odo_.back().t - opt_.max_speed_window_us);
+  while (odo_.size() >= 2 && odo_[1].t <= keep_odometry_from) odo_.pop_front();
   while (!det_.empty() && det_.front().t < keep_from) det_.pop_front();
   bool dropped = false;
   while (odo_.size() > opt_.max_odometry) {

@@ -5,6 +5,7 @@
 #include "fact/gossip.h"
 #include "fact_gossip/wire.h"
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -673,6 +674,51 @@ TEST(RoundBuilder, ASpinMakesOneRoundWithTheMostCentralDetectionPerTrack) {
   EXPECT_EQ(r.data.observations[2].vector, Eigen::Vector3d(-1, 2, 0.0));
   EXPECT_NEAR(r.data.observations[2].odom_position.x(), 0.34, 1e-9);
   EXPECT_EQ(b.counters().rounds, 1);
+}
+
+// Spin 6.5 rad at A, fly 2 m to B in 2 s while turning 1 rad, spin at B: the second round is
+// the turn in place at B only. Without the speed rule it would close 1.2 s earlier and span the
+// move, with its start (the round's position) at A.
+TEST(RoundBuilder, AMoveRestartsTheOpenRoundSoARoundIsATurnInPlace) {
+  const auto position = [](double t) {
+    const double f = std::clamp((t - 6.5) / 2.0, 0.0, 1.0);
+    return Eigen::Vector3d(1.0, 2.0 * f, 1.5);
+  };
+  const auto yaw = [](double t) { return t < 6.5 ? t : t < 8.5 ? 6.5 + 0.5 * (t - 6.5) : 7.5 + (t - 8.5); };
+  RoundBuilder b;
+  std::vector<BuiltRound> rounds;
+  for (int i = 0; i * 0.01 <= 16.0 + 1e-9; ++i) {
+    const double t = i * 0.01;
+    ASSERT_EQ(b.add_odometry(at_s(t), position(t), yaw(t)), "");
+    if (std::abs(t - 7.5) < 1e-9) {
+      EXPECT_EQ(b.add_detection(at_s(7.5), 3, Eigen::Vector3d(3, 0, 0)), "");  // while moving
+    }
+    if (std::abs(t - 10.0) < 1e-9) {
+      EXPECT_EQ(b.add_detection(at_s(10.0), 3, Eigen::Vector3d(3, 0.2, 0)), "");
+    }
+    for (auto& r : b.take_rounds()) rounds.push_back(r);
+  }
+  ASSERT_EQ(rounds.size(), 2u);
+  const BuiltRound& r = rounds[1];
+  EXPECT_GE(r.start_utime, at_s(8.5));   // after the move
+  EXPECT_NEAR(r.end_utime, at_s(8.5 + 2 * M_PI), 0.2 * kS);
+  EXPECT_NEAR(r.data.position.y(), 2.0, 0.01);  // at B
+  ASSERT_EQ(r.data.observations.size(), 1u);
+  EXPECT_EQ(r.data.observations[0].vector, Eigen::Vector3d(3, 0.2, 0));
+  EXPECT_NEAR(r.data.observations[0].odom_position.y(), 2.0, 1e-9);
+  EXPECT_EQ(b.counters().moves, 1);
+
+  BuilderOptions off;
+  off.max_speed = 0;  // the rule off: the round spans the move
+  RoundBuilder plain(off);
+  std::vector<BuiltRound> spans;
+  for (int i = 0; i * 0.01 <= 16.0 + 1e-9; ++i) {
+    plain.add_odometry(at_s(i * 0.01), position(i * 0.01), yaw(i * 0.01));
+    for (auto& x : plain.take_rounds()) spans.push_back(x);
+  }
+  ASSERT_EQ(spans.size(), 2u);
+  EXPECT_LT(spans[1].start_utime, at_s(6.5));
+  EXPECT_EQ(plain.counters().moves, 0);
 }
 
 TEST(RoundBuilder, DetectionsAreInterpolatedBetweenOdometrySamples) {

@@ -47,6 +47,7 @@ struct Flags {
   bool rounds_from_channel = false;         // take round_packet_t instead of building rounds
   double round_period = 0;                  // s; > 0: rounds of this length instead of spins
   double spin_angle = 2 * M_PI;             // rad of net yaw turn that closes a round
+  double max_speed = 0.25;                  // m/s; faster, the drone is moving and the open round restarts
   double detection_latency = 0.3;           // s of odometry time a round waits for late detections
   double max_odometry_gap = 0.5;            // s; no interpolation across larger gaps
   double summary_period = 1.0;              // s, heartbeat summary
@@ -335,6 +336,10 @@ int main(int argc, char** argv) {
   cli.add_option("--round-period", f.round_period, "s; > 0: back-to-back rounds of this length instead of detecting spins")
       ->capture_default_str();
   cli.add_option("--spin-angle", f.spin_angle, "rad of net yaw turn that closes a round (spin mode)")->capture_default_str();
+  cli.add_option("--max-speed", f.max_speed,
+                 "m/s; spin mode: moving faster (over 0.2 s of odometry) restarts the open round, so a round is a turn "
+                 "in place (0 = off)")
+      ->capture_default_str();
   cli.add_option("--detection-latency", f.detection_latency, "s (odometry time) a closed round waits for late detections")
       ->capture_default_str();
   cli.add_option("--max-odometry-gap", f.max_odometry_gap, "s; odometry is not interpolated across larger gaps")->capture_default_str();
@@ -429,6 +434,7 @@ int main(int argc, char** argv) {
   }
   fact::gossip::BuilderOptions bo;
   bo.spin_angle = f.spin_angle;
+  bo.max_speed = f.max_speed;
   bo.round_period_us = us(f.round_period);
   bo.latency_us = us(f.detection_latency);
   bo.max_odometry_gap_us = us(f.max_odometry_gap);

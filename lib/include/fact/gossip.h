@@ -290,6 +290,11 @@ class Gossip {
 
 struct BuilderOptions {
   double spin_angle = 6.283185307179586;  // rad of net yaw turn that makes a round (spin mode)
+  // Spin mode: a round is a turn in place. Faster than this (m/s, over the last max_speed_window
+  // of odometry), the drone is moving and the open round starts again when it stops, so that a
+  // round's detections all come from one spot (the mutual-pair geometry needs it). 0 = off.
+  double max_speed = 0.25;
+  int64_t max_speed_window_us = 200000;
   int64_t round_period_us = 0;            // > 0: period mode, rounds of this length (µs)
   int64_t latency_us = 300000;            // wait this long (odometry time) past a round's end (µs)
   int64_t max_odometry_gap_us = 500000;   // no interpolation across a larger gap between samples (µs)
@@ -306,6 +311,7 @@ struct BuilderCounters {
   int64_t rejected_detections = 0;   // NaN, zero vector
   int64_t late_detections = 0;       // older than the open round's start
   int64_t unmatched_detections = 0;  // no odometry around its time (gap, or before the first sample)
+  int64_t moves = 0;                 // times the open round restarted because the drone moved
   int64_t dropped_history = 0;       // samples or detections dropped at the caps
   int64_t dropped_tracks = 0;        // tracks beyond max_tracks
   int64_t rounds = 0;
@@ -345,6 +351,7 @@ class RoundBuilder {
     int64_t t0, t1;
   };
   void close_if_spun();
+  bool moving() const;
   void finalize(const Closed& c);
   void trim();
 
@@ -352,6 +359,7 @@ class RoundBuilder {
   std::deque<Odo> odo_;
   std::deque<Det> det_;
   bool started_ = false;
+  bool moving_ = false;         // the newest odometry was moving (see max_speed)
   int64_t open_start_ = 0;      // the open round may start here at the earliest
   double min_yaw_ = 0, max_yaw_ = 0;  // over samples since open_start_ (spin mode)
   std::deque<Closed> closing_;  // closed, waiting for latency
