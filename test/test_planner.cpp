@@ -169,6 +169,33 @@ TEST(PlannerRules, RandomDirectionWithItsProbability) {
   EXPECT_NE(plan.reason.find("random direction"), std::string::npos);
 }
 
+// The deliberate move of an ambiguous formation is random, but never away from the drones seen:
+// within ±90° of their centroid, both sides drawn; with none seen, every quadrant is drawn.
+TEST(PlannerRules, AmbiguousMoveStaysWithin90DegreesOfTheSeenDrones) {
+  fact::PlannerParams p;
+  const Vector3d start(0, 0, 1.5);
+  int left = 0, right = 0;
+  for (uint64_t s = 1; s <= 400; ++s) {
+    fact::PlannerInput in = input_at(start, fact::ResultStatus::ambiguous, s);
+    in.observed = {Vector3d(5, 1, 1.5), Vector3d(5, -1, 1.5)};  // centroid straight ahead (+x)
+    const fact::Plan plan = fact::plan_step(in, {}, p);
+    ASSERT_EQ(plan.kind, fact::PlanKind::move) << plan.reason;
+    const Vector3d step = plan.target - start;
+    EXPECT_GE(step.x(), -1e-9) << "seed " << s << ": " << step.transpose();
+    (step.y() > 0 ? left : right) += 1;
+    EXPECT_NE(plan.reason.find("within 90° of the observed drones"), std::string::npos) << plan.reason;
+  }
+  EXPECT_GT(left, 120);
+  EXPECT_GT(right, 120);
+  int quadrants[4] = {0, 0, 0, 0};
+  for (uint64_t s = 1; s <= 400; ++s) {
+    const fact::Plan plan = fact::plan_step(input_at(start, fact::ResultStatus::ambiguous, s), {}, p);
+    const Vector3d step = plan.target - start;
+    ++quadrants[(step.x() < 0 ? 1 : 0) + (step.y() < 0 ? 2 : 0)];
+  }
+  for (int q : quadrants) EXPECT_GT(q, 60);
+}
+
 TEST(PlannerRules, AmbiguousMakesADeliberateMoveEvenWithNoDroneObserved) {
   fact::PlannerParams p;
   p.random_move_probability = 0;

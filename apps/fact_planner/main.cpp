@@ -444,13 +444,20 @@ class Planner {
     in.status = status;
     in.rng = rng_;
     for (const auto& [track, s] : seen_) in.observed.push_back(s.first / s.second);
+    // A spin that saw no drone (occluded, or a far drone missed) keeps the latest sightings (f_i):
+    // without them the move would be blind, with no max-move bound from the nearest drone and no
+    // direction toward the swarm.
+    const bool remembered = in.observed.empty() && !last_observed_.empty();
+    if (in.observed.empty()) in.observed = last_observed_;
+    last_observed_ = in.observed;
     in.known = known();
     const std::vector<fact::ObstacleBox> pieces = map_.pieces();
     fact::Plan plan = fact::plan_step(in, pieces, o_.planner);
     rng_ = plan.rng;
     status_.count("plans");
     std::ostringstream s;
-    s << why << "; " << fact::to_string(status) << ", " << in.observed.size() << " observed, " << in.known.size()
+    s << why << "; " << fact::to_string(status) << ", " << in.observed.size() << (remembered ? " remembered" : " observed")
+      << ", " << in.known.size()
       << " known, " << pieces.size() << " obstacle pieces: " << fact::to_string(plan.kind) << " to " << fmt(plan.target)
       << " (max_move " << plan.max_move << " m): " << plan.reason;
     if (plan.kind == fact::PlanKind::rejected || plan.kind == fact::PlanKind::hover_fallback) {
@@ -618,6 +625,7 @@ class Planner {
   std::deque<PendingFrame> frames_;
   std::vector<uint16_t> depth_;
   std::map<int, std::pair<Vector3d, int>> seen_;  // this spin: track id → (sum of positions in f_i, count)
+  std::vector<Vector3d> last_observed_;            // the latest spin's sightings that had any (f_i, m)
   int complete_rounds_ = 0;
   std::map<int, std::pair<Vector3d, double>> round_starts_;  // drone id → newest round-start position, yaw (own frame)
   std::optional<fact::swarm_result_t> result_;

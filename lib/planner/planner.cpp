@@ -223,8 +223,21 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
   std::string why;
   PlannerRng rng = in.rng;
   if (in.status == ResultStatus::ambiguous) {
-    angle = 2 * kPi * rng.uniform();
-    why = "ambiguous formation: deliberate move in a random direction";
+    // A deliberate move breaks a symmetric formation: a random direction, but within ±90° of the
+    // seen drones' centroid when there is one, so that a drone never turns its back on the drones
+    // it must keep seeing (moving apart thins the evidence: range noise grows as range²).
+    const double u = rng.uniform();
+    const std::vector<Eigen::Vector3d>& pool = !in.observed.empty() ? in.observed : in.known;
+    Eigen::Vector2d towards = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector3d& q : pool) towards += (q - in.position).head<2>();
+    if (towards.norm() > 1e-6) {
+      angle = std::atan2(towards.y(), towards.x()) + kPi * (u - 0.5);
+      why = "ambiguous formation: deliberate move in a random direction within 90° of the " +
+            std::string(!in.observed.empty() ? "observed" : "known") + " drones";
+    } else {
+      angle = 2 * kPi * u;
+      why = "ambiguous formation: deliberate move in a random direction";
+    }
   } else {
     const double r = rng.uniform();
     const double a = 2 * kPi * rng.uniform();  // drawn always, so the stream does not depend on r

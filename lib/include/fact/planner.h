@@ -85,7 +85,8 @@ struct PlannerInput {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s
   Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  // m/s²
   double yaw = 0;                                          // rad
-  // Other drones seen in the last spin, from own detections: observed_position() of each.
+  // Other drones seen in the last spin, from own detections: observed_position() of each (the
+  // planner app passes the latest spin that saw any, when the last one saw none).
   std::vector<Eigen::Vector3d> observed;
   // Other drones' positions from the solver's result, when there is one (may be empty).
   std::vector<Eigen::Vector3d> known;
@@ -173,8 +174,10 @@ std::string check_trajectory(const Trajectory& trajectory, const std::vector<Obs
 //  - invalid input → rejected (the reason names the field);
 //  - certified → hold (come to rest where the drone is);
 //  - d = distance to the nearest drone of observed ∪ known, max_move = max_move_distance(d);
-//  - ambiguous → a deliberate move of max_move in a uniformly random horizontal direction, even
-//    when the farthest-drone rule would give none (hold only if max_move is 0: reason says so);
+//  - ambiguous → a deliberate move of max_move in a random horizontal direction, uniform within
+//    ±90° of the direction to the observed (else known) drones' centroid, uniform over the circle
+//    when none is seen; even when the farthest-drone rule would give none (hold only if max_move
+//    is 0: reason says so);
 //  - otherwise, with random_move_probability a random horizontal direction, else the horizontal
 //    direction toward the farthest observed (else known) drone; none known → hold;
 //  - target = position + max_move·direction (z clamped to [z_min, z_max]), pushed out of the
