@@ -6,6 +6,7 @@
 #include "fact/odometry_t.hpp"
 #include "fact/sim_clock_t.hpp"
 #include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
 #include "fact/truth_t.hpp"
 
 #include <gtest/gtest.h>
@@ -111,11 +112,15 @@ std::string encode(const T& m) {
   return b;
 }
 
-// A 10 s run of 3 drones hovering at 1.5 m (static frames, no drift); drone 0 publishes `status`
-// at 8 s with drone 2's yaw off by `yaw_error` (no result at all when `status` is "none").
-std::string write_log(const std::string& status, double yaw_error, bool with_truth = true) {
+// A 10 s run of 3 drones hovering at 1.5 m; drone 0 publishes `status` at 8 s with drone 2's
+// yaw off by `yaw_error` (no result at all when `status` is "none"). With `drift` (rad/s), drone
+// 2's VIO yaw drifts at that rate, the result gives its frame as during round 1, and the log has
+// the swarm's rounds 0 (closed at 3 s) and 1 (closed at 6 s).
+std::string write_log(const std::string& status, double yaw_error, bool with_truth = true, double drift = 0) {
   const std::string path = (fs::temp_directory_path() / ("fact-report-" + std::to_string(getpid()) + "-" + status +
-                                                         std::to_string(yaw_error) + ".lcm")).string();
+                                                         std::to_string(yaw_error) + "-" + std::to_string(drift) +
+                                                         ".lcm")).string();
+  const auto drift_at = [&](int i, double t_s) { return i == 2 ? drift * t_s : 0.0; };
   lcm::LogFile log(path, "w");
   fact::swarm_result_t r{};
   r.utime = kEpoch + 8000000;
@@ -130,11 +135,26 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
     p.id = i;
     const Eigen::Matrix3d R0 = Eigen::AngleAxisd(-kFrames[0].frame_yaw, Vector3d::UnitZ()).toRotationMatrix();
     const Vector3d t = R0 * (kFrames[i].origin - kFrames[0].origin);
-    p.yaw = kFrames[i].frame_yaw - kFrames[0].frame_yaw + (i == 2 ? yaw_error : 0);
+    p.yaw = kFrames[i].frame_yaw - kFrames[0].frame_yaw + (i == 2 ? yaw_error : 0) + drift_at(i, 4.5);  // round 1's mean
     for (int k = 0; k < 3; ++k) p.position[k] = t[k];
     p.resolved = true;
     r.drones.push_back(p);
   }
+  fact::swarm_rounds_t rounds{};
+  rounds.drone_id = 0;
+  rounds.complete_rounds = 2;
+  rounds.num_drones = 3;
+  rounds.drone_ids = {0, 1, 2};
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < 3; ++i) {
+      fact::round_packet_t p{};
+      p.utime = kEpoch + (k + 1) * 3000000;
+      p.drone_id = i;
+      p.round = k;
+      rounds.packets.push_back(p);
+    }
+  rounds.num_packets = static_cast<int32_t>(rounds.packets.size());
+  rounds.utime = kEpoch + 6000000;
   for (int64_t t = 0; t <= 10000000; t += 100000) {
     fact::sim_clock_t c;
     c.utime = kEpoch + t;
@@ -152,14 +172,16 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
       for (int k = 0; k < 3; ++k) o.position[k] = vio[k];
       o.yaw = vio_yaw;
       write_event(log, kEpoch + t, "FACT_VIO_RAW_" + std::to_string(i), encode(o));
-      const Vector3d world = Eigen::AngleAxisd(kFrames[i].frame_yaw, Vector3d::UnitZ()) * vio + kFrames[i].origin;
+      const double frame_yaw = kFrames[i].frame_yaw + drift_at(i, t * 1e-6);  // the drifted frame
+      const Vector3d world = Eigen::AngleAxisd(frame_yaw, Vector3d::UnitZ()) * vio + kFrames[i].origin;
       tr.drone_ids.push_back(i);
       tr.frame_yaw.push_back(kFrames[i].frame_yaw);
       tr.frame_origin.push_back({kFrames[i].origin.x(), kFrames[i].origin.y(), kFrames[i].origin.z()});
       tr.position.push_back({world.x(), world.y(), world.z()});
-      tr.yaw.push_back(kFrames[i].frame_yaw + vio_yaw);
+      tr.yaw.push_back(frame_yaw + vio_yaw);
     }
     if (with_truth) write_event(log, kEpoch + t, "FACT_TRUTH", encode(tr));
+    if (drift != 0 && t == 6000000) write_event(log, kEpoch + t, "FACT_SWARM_ROUNDS_0", encode(rounds));
     if (t == 8000000 && status != "none") write_event(log, kEpoch + t, "FACT_RESULT_0", encode(r));  // in log order
   }
   return path;
@@ -183,6 +205,23 @@ Ran run_report(const std::string& args) {
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in);
+}
+
+// The estimate describes the frames during the latest round; the report judges it against them,
+// and also shows the errors against the frames averaged from takeoff, which drift has moved.
+TEST(RunReportApp, DriftingFramesAreJudgedDuringTheLatestRound) {
+  const std::string log = write_log("certified", 0, true, 0.05);
+  const std::string json = log + ".json";
+  const Ran r = run_report("--log " + log + " --json " + json);
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("averaged over round 1"), std::string::npos) << r.out;
+  const auto j = read_json(json);
+  EXPECT_EQ(j["truth_round"], 1);
+  EXPECT_NEAR(j["yaw_max_rad"].get<double>(), 0, 1e-3);  // frames over 3 … 6 s: mean drift 0.225 rad
+  // Over 0 … 8 s the mean drift is 0.2 rad, so drone 2 is 0.025 rad off those frames.
+  EXPECT_NEAR(j["whole_window"]["yaw_max_rad"].get<double>(), 0.025, 2e-3);
+  fs::remove(log);
+  fs::remove(json);
 }
 
 TEST(RunReportApp, CorrectCertifiedResultExitsZeroWithItsNumbers) {
