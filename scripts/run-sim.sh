@@ -43,7 +43,7 @@ Flags:
   --camera-rate HZ    frames per second per drone (default 10)
   --yaw-bound RAD     error bounds of a correct result (default 0.05 rad, 0.20 m)
   --position-bound M
-  --spin-rate RAD/S   the planners' spin rate (default 1.2)
+  --spin-rate RAD/S   the planners' spin rate (default 1.4)
   --max-rounds K      a planner holds, not certified, after K spins (default 8)
   --shared-namespace  all drones in one private namespace (what runs without root)
   --no-build          use the binaries in \$BUILD_DIR (default build/) as they are
@@ -55,7 +55,7 @@ EOF
 # ---------------------------------------------------------------- flags
 drones="" world="$here/apps/fact_sim/worlds/default.json" seed=1 mode=realtime fast_rate=4
 out="" max_sim=150 resolution=640x480 camera_rate=10 yaw_bound=0.05 position_bound=0.20
-shared=0 build=1 quiet=0 spin_rate=1.2 max_rounds=8
+shared=0 build=1 quiet=0 spin_rate=1.4 max_rounds=8
 die_usage() { echo "run-sim: $*" >&2; echo "run-sim: see --help" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] && [ -n "$2" ] || die_usage "$1 needs a value"; }
 while [ "$#" -gt 0 ]; do

@@ -39,7 +39,7 @@ struct PlannerParams {
   // which closes a round after a full 2π of unwrapped yaw, always sees the turn complete even
   // with odometry noise), at most spin_rate, rate ramped up and down at yaw_accel.
   double spin_rate = 0.6;          // rad/s
-  double yaw_accel = 0.6;          // rad/s²
+  double yaw_accel = 1.4;          // rad/s²
   double spin_overlap = 0.35;      // rad
   // Separation and moves.
   double min_separation = 1.0;     // m, centre to centre, from every other drone, always
