@@ -234,13 +234,42 @@ TEST(PlannerRules, CertifiedHolds) {
   EXPECT_EQ(brake.trajectory.sample(brake.trajectory.duration()).velocity.norm(), 0);
 }
 
-TEST(PlannerRules, TooCloseHolds) {
+// Too close to move toward the nearest drone (1.1 m with 1 m separation: (d − s)/2 − margin < 0):
+// the drone moves away from it instead of holding (two such drones used to hold side by side for
+// the whole session). Sandwiched between two, it moves across the line joining them. Straight
+// below another, it holds.
+TEST(PlannerRules, TooCloseMovesAwayFromTheNearestDrone) {
   fact::PlannerParams p;
   fact::PlannerInput in = input_at(Vector3d(0, 0, 1.5), fact::ResultStatus::ambiguous);
   in.known = {Vector3d(1.1, 0, 1.5)};
   const fact::Plan plan = fact::plan_step(in, {}, p);
-  EXPECT_EQ(plan.kind, fact::PlanKind::hold);
-  EXPECT_NE(plan.reason.find("max move"), std::string::npos) << plan.reason;
+  ASSERT_EQ(plan.kind, fact::PlanKind::move) << plan.reason;
+  EXPECT_NE(plan.reason.find("moving away"), std::string::npos) << plan.reason;
+  EXPECT_NEAR(plan.target.x(), -p.move_max, 1e-9);  // straight away, the full move
+  EXPECT_NEAR(plan.target.y(), 0, 1e-9);
+
+  in.known = {Vector3d(1.1, 0, 1.5), Vector3d(-1.2, 0, 1.5)};
+  const fact::Plan across = fact::plan_step(in, {}, p);
+  ASSERT_EQ(across.kind, fact::PlanKind::move) << across.reason;
+  EXPECT_NEAR(across.target.x(), 0, 1e-9);  // no component toward either
+  EXPECT_NEAR(std::abs(across.target.y()), p.move_max, 1e-9);
+
+  in.known = {Vector3d(1.1, 0, 1.5), Vector3d(-1.2, 0, 1.5), Vector3d(0, 1.15, 1.5), Vector3d(0, -1.3, 1.5)};
+  const fact::Plan boxed = fact::plan_step(in, {}, p);  // every direction approaches one of them
+  EXPECT_EQ(boxed.kind, fact::PlanKind::hover_fallback) << boxed.reason;
+  in.known = {Vector3d(1.1, 0, 1.5), Vector3d(-1.2, 0.5, 1.5), Vector3d(0.3, 2.0, 1.5)};
+  const fact::Plan free = fact::plan_step(in, {}, p);
+  ASSERT_EQ(free.kind, fact::PlanKind::move) << free.reason;
+  for (const Vector3d& q : in.known) {  // its part toward each drone fits that drone's half
+    const Vector3d r = q - in.position;
+    const double toward = (free.target - in.position).dot(r.normalized());
+    EXPECT_LE(toward, std::max(0.0, (r.norm() - p.min_separation) / 2 - p.move_margin) + 1e-9);
+  }
+
+  in.known = {Vector3d(0, 0, 2.4)};
+  const fact::Plan below = fact::plan_step(in, {}, p);
+  EXPECT_EQ(below.kind, fact::PlanKind::hold);
+  EXPECT_NE(below.reason.find("max move"), std::string::npos) << below.reason;
 }
 
 TEST(PlannerSafety, PenetrationMatchesTheGeometry) {

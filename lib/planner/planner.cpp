@@ -174,6 +174,24 @@ double max_move_distance(double d, const PlannerParams& p) {
   return std::min(p.move_max, std::max(0.0, (d - p.min_separation) / 2 - p.move_margin));
 }
 
+// The max-move rule along one direction (unit vector `dir`): only the part of a move toward a
+// drone must fit within that drone's half of the spare separation, so a drone too close to move
+// toward its neighbour can still move away from it. With every drone's component toward another
+// within (d − s)/2 − margin (the symmetric rule is the special case), their distance along the
+// line between them, and so their distance, stays ≥ s + 2·margin.
+double directional_max_move(const Eigen::Vector3d& position, const Eigen::Vector3d& dir,
+                            const std::vector<Eigen::Vector3d>& drones, const PlannerParams& p) {
+  double cap = p.move_max;
+  for (const Eigen::Vector3d& q : drones) {
+    const Eigen::Vector3d r = q - position;
+    const double d = r.norm();
+    const double toward = d > 1e-9 ? dir.dot(r) / d : 1.0;
+    if (toward <= 1e-9) continue;
+    cap = std::min(cap, std::max(0.0, (d - p.min_separation) / 2 - p.move_margin) / toward);
+  }
+  return cap;
+}
+
 Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, const PlannerParams& p) {
   Plan plan;
   plan.rng = in.rng;
@@ -215,14 +233,24 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
     plan.reason = why;
     return plan;
   };
-  if (max_move < std::max(p.min_useful_move, 1e-9))
+  // Too close to move toward the nearest drone: move away from it (the directional rule), so two
+  // drones that took off near each other do not hold side by side round after round.
+  const bool separate = max_move < std::max(p.min_useful_move, 1e-9);
+  Eigen::Vector2d away = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector3d& q : drones)
+    if ((q - in.position).norm() <= d + 1e-9) away = (in.position - q).head<2>();
+  if (separate && away.norm() < 1e-6)
     return hold(PlanKind::hold, std::string(to_string(in.status)) + ": nearest drone at " + num(d) +
-                                    " m leaves a max move of " + num(max_move) + " m: hold");
+                                    " m (straight above or below) leaves a max move of " + num(max_move) + " m: hold");
   // Direction.
   double angle = 0;
   std::string why;
   PlannerRng rng = in.rng;
-  if (in.status == ResultStatus::ambiguous) {
+  if (separate) {
+    angle = std::atan2(away.y(), away.x());
+    why = std::string(to_string(in.status)) + ": nearest drone at " + num(d) + " m leaves a max move of " +
+          num(max_move) + " m toward it: moving away from it";
+  } else if (in.status == ResultStatus::ambiguous) {
     // A deliberate move breaks a symmetric formation: a random direction, but within ±90° of the
     // seen drones' centroid when there is one, so that a drone never turns its back on the drones
     // it must keep seeing (moving apart thins the evidence: range noise grows as range²).
@@ -269,7 +297,7 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
   plan.rng = rng;
   // Only pieces that a target in the max-move ball, its push-out or its path can touch.
   std::vector<ObstacleBox> near;
-  const double reach = max_move + obstacle_inflation(p) + 0.5;
+  const double reach = (separate ? p.move_max : max_move) + obstacle_inflation(p) + 0.5;
   for (const ObstacleBox& b : pieces)
     if (box_distance(b, in.position) < reach) near.push_back(b);
   // Candidates: the direction at the fallback fractions, then turned by ±45°, ±90°, ±135°, 180°.
@@ -278,8 +306,10 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
   const TrajectoryLimits lim = limits_of(p);
   const TrajectoryStart start = start_of(in);
   for (double turn : turns) {
+    // A separating move's length follows the directional rule for each candidate direction.
+    const double cap = separate ? directional_max_move(in.position, horizontal_dir(angle + turn), drones, p) : max_move;
     for (double frac : p.fallback_fractions) {
-      const double len = max_move * frac;
+      const double len = cap * frac;
       if (len < p.min_useful_move) continue;
       Eigen::Vector3d target = in.position + len * horizontal_dir(angle + turn);
       target.z() = std::clamp(target.z(), p.z_min, p.z_max);
@@ -289,19 +319,22 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
         problem = "target " + num(target.x()) + ", " + num(target.y()) + " could not be pushed out of the obstacles";
       } else if (pushed.z() < p.z_min - 1e-9 || pushed.z() > p.z_max + 1e-9) {
         problem = "pushed target leaves the height window";
-      } else if ((pushed - in.position).norm() > max_move * (1 + 1e-9)) {
+      } else if ((pushed - in.position).norm() > cap * (1 + 1e-9)) {
         problem = "pushed target leaves the max-move ball";
       } else if ((pushed - in.position).norm() < p.min_useful_move) {
         problem = "pushed target is too close to be worth a move";
       } else {
         Trajectory tr;
         problem = min_jerk_within_limits(start, pushed, lim, &tr);
-        if (problem.empty()) problem = check_trajectory(tr, near, drones, in.position, max_move, p);
+        if (problem.empty()) problem = check_trajectory(tr, near, drones, in.position, cap, p);
+        if (problem.empty() && separate && directional_max_move(in.position, (pushed - in.position).normalized(), drones, p) <
+                                              (pushed - in.position).norm() * (1 - 1e-9))
+          problem = "pushed target moves too far toward a drone";
         if (problem.empty()) {
           plan.kind = PlanKind::move;
           plan.target = pushed;
           plan.trajectory = tr;
-          plan.reason = why + ", max move " + num(max_move) + " m";
+          plan.reason = why + ", max move " + num(cap) + " m";
           if (turn != 0 || frac != p.fallback_fractions.front())
             plan.reason += "; alternative: turned " + num(turn * 180 / kPi, "%.0f") + "°, " + num(frac) +
                            " of the move (first choice: " + first_problem + ")";
