@@ -85,9 +85,10 @@ void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, cons
 // n = matrix size, m = number of constraints, d = block size.
 struct Workspace {
   Workspace(int n, int m, int d)
-      : chol_x(n), chol_z(n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
+      : chol_x(n), chol_z(n), Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
         dx(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
-  Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n)
+  Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n), large n
+  Eigen::MatrixXd Lx, Lz;                      // the same factors for small n (cholesky_lower, n × n)
   Eigen::LLT<Eigen::MatrixXd> chol_m;          // the Schur complement's factorisation (m × m)
   Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
   Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
@@ -98,6 +99,14 @@ struct Workspace {
   Eigen::VectorXd rhs, dy_aff, dy;             // Schur right-hand side and dual directions (m)
   StepLength steps;                            // step-length work matrices
 };
+
+// Cholesky factors of X and Z: plain loops into ws.Lx, ws.Lz for small n, Eigen's LLT otherwise.
+bool factorize(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Z, bool small, Workspace& ws) {
+  if (small) return cholesky_lower(Z, ws.Lz) && cholesky_lower(X, ws.Lx);
+  ws.chol_z.compute(Z);
+  ws.chol_x.compute(X);
+  return ws.chol_z.info() == Eigen::Success && ws.chol_x.info() == Eigen::Success;
+}
 
 // The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n).
 void primal_direction(const Eigen::MatrixXd& X, double sigma_mu, Workspace& ws, Eigen::MatrixXd& dx) {
@@ -175,15 +184,15 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
       break;
     }
     const double mu = gap / n;
-    ws.chol_z.compute(Z);
-    ws.chol_x.compute(X);
-    if (ws.chol_z.info() != Eigen::Success || ws.chol_x.info() != Eigen::Success) {
+    if (!factorize(X, Z, exact_steps, ws)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
-    invert_lower_factor(ws.chol_z, ws.Lz_inv);
+    const Eigen::MatrixXd& Lx = exact_steps ? ws.Lx : ws.chol_x.matrixLLT();  // lower triangles are the factors
+    const Eigen::MatrixXd& Lz = exact_steps ? ws.Lz : ws.chol_z.matrixLLT();
+    invert_lower_factor(Lz, ws.Lz_inv);
     ws.W.noalias() = ws.Lz_inv.transpose() * ws.Lz_inv;  // Z⁻¹
-    if (exact_steps) invert_lower_factor(ws.chol_x, ws.Lx_inv);
+    if (exact_steps) invert_lower_factor(Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
     ws.chol_m.compute(ws.M);
     if (ws.chol_m.info() != Eigen::Success) {
@@ -196,8 +205,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
     times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
     primal_direction(X, 0.0, ws, ws.dx_aff);
-    const double ap_aff = ws.steps.full(X, ws.chol_x, ws.Lx_inv, ws.dx_aff, 1.0);
-    const double ad_aff = ws.steps.block_diagonal(Z, ws.chol_z, ws.Lz_inv, ws.dz_aff, d, 1.0);
+    const double ap_aff = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx_aff, 1.0);
+    const double ad_aff = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
     const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
@@ -216,8 +225,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     times_block_diagonal(X, ws.dz, d, ws.dx);  // X ΔZ, through dx as scratch
     ws.P += ws.dx;
     primal_direction(X, sigma * mu, ws, ws.dx);
-    const double ap = ws.steps.full(X, ws.chol_x, ws.Lx_inv, ws.dx, tau);
-    const double ad = ws.steps.block_diagonal(Z, ws.chol_z, ws.Lz_inv, ws.dz, d, tau);
+    const double ap = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx, tau);
+    const double ad = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz, d, tau);
     if (ap == 0.0 && ad == 0.0) {
       out.reason = "interior point stalled at iteration " + std::to_string(it);
       break;

@@ -76,16 +76,18 @@ void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, N
   }
 }
 
-// H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the d × t matrices Bc_i (column c of
-// every basis matrix of block i): entry (i a, j b) is 2⟨B_ia, S_ij B_jb⟩.
-void hessian(int d, Eigen::Index r, int blocks, int t, NewtonWorkspace& ws) {
+// H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the D × t matrices Bc_i (column c of
+// every basis matrix of block i): entry (i a, j b) is 2⟨B_ia, S_ij B_jb⟩. D = d as a
+// compile-time size, so the products with inner dimension D are small fixed-size kernels.
+template <int D>
+void hessian(Eigen::Index r, int blocks, int t, NewtonWorkspace& ws) {
   ws.H.setZero();
   for (Eigen::Index c = 0; c < r; ++c) {
     for (int a = 0; a < t; ++a) ws.Bc.col(a) = ws.basis.col(r * a + c);
     for (int j = 0; j < blocks; ++j)
-      ws.SB.middleCols(j * t, t).noalias() = ws.S.middleCols(j * d, d) * ws.Bc.middleRows(j * d, d);
+      ws.SB.middleCols(j * t, t).noalias() = ws.S.middleCols<D>(j * D) * ws.Bc.middleRows<D>(j * D);
     for (int i = 0; i < blocks; ++i)
-      ws.H.middleRows(i * t, t).noalias() += ws.Bc.middleRows(i * d, d).transpose() * ws.SB.middleRows(i * d, d);
+      ws.H.middleRows(i * t, t).noalias() += ws.Bc.middleRows<D>(i * D).transpose() * ws.SB.middleRows<D>(i * D);
   }
   ws.H *= 2.0;
   for (Eigen::Index q = 0; q < ws.H.cols(); ++q)
@@ -150,7 +152,10 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
       for (int a = 0; a < t; ++a)
         ws.g[i * t + a] = 2.0 * ws.basis.block(i * d, r * a, d, r).cwiseProduct(ws.SY.middleRows(i * d, d)).sum();
     if (ws.g.norm() < grad_tol) break;
-    hessian(d, r, blocks, t, ws);
+    if (d == 1)
+      hessian<1>(r, blocks, t, ws);
+    else
+      hessian<2>(r, blocks, t, ws);
     bool stepped = false;
     for (int tries = 0; tries < 12 && !stepped; ++tries, mu *= 10) {
       ws.shifted = ws.H;

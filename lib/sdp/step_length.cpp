@@ -9,44 +9,68 @@
 namespace fact::sdp::detail {
 namespace {
 
-// Householder reduction of the symmetric A (n × n, full storage; destroyed) to the tridiagonal
-// matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1). p is scratch (n).
-// Step k reflects column k below the diagonal onto e₁ with H = I − τ v vᵀ and updates the
-// trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᵀ − w vᵀ, w = τ A₂₂ v − (τ² vᵀA₂₂v / 2) v.
+// w = τ A v for the symmetric m × m matrix A given by its lower triangle (column-major,
+// leading dimension lda). One pass over the lower triangle: column j adds A(j:m, j) v_j to
+// w(j:m) and A(j+1:m, j)ᵀ v(j+1:m) to w_j.
+void symmetric_times(const double* __restrict a, Eigen::Index lda, Eigen::Index m, const double* __restrict v,
+                     double tau, double* __restrict w) {
+  std::fill(w, w + m, 0.0);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double* col = a + j * lda;
+    const double vj = tau * v[j];
+    double dot = 0;
+    w[j] += col[j] * vj;
+    for (Eigen::Index i = j + 1; i < m; ++i) {
+      w[i] += col[i] * vj;
+      dot += col[i] * v[i];
+    }
+    w[j] += tau * dot;
+  }
+}
+
+// A −= v wᵀ + w vᵀ on the lower triangle of the m × m matrix A (column-major, leading dimension lda).
+void symmetric_rank2_update(double* __restrict a, Eigen::Index lda, Eigen::Index m, const double* __restrict v,
+                            const double* __restrict w) {
+  for (Eigen::Index j = 0; j < m; ++j) {
+    double* col = a + j * lda;
+    const double vj = v[j], wj = w[j];
+    for (Eigen::Index i = j; i < m; ++i) col[i] -= v[i] * wj + w[i] * vj;
+  }
+}
+
+// Householder reduction of the symmetric A (n × n, lower triangle used; destroyed) to the
+// tridiagonal matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1).
+// scratch is 2n. Step k reflects column k below the diagonal onto e₁ with H = I − τ v vᵀ and
+// updates the trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᵀ − w vᵀ with
+// w = τ A₂₂ v − (τ² vᵀA₂₂v / 2) v.
 void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
-                    Eigen::VectorXd& p) {
-  const Eigen::Index n = A.rows();
+                    Eigen::VectorXd& scratch) {
+  const Eigen::Index n = A.rows(), lda = A.outerStride();
+  double* v = scratch.data();      // Householder vector, m
+  double* w = scratch.data() + n;  // w above, m
   for (Eigen::Index k = 0; k + 2 < n; ++k) {
     const Eigen::Index m = n - k - 1;  // size of the trailing block
-    double* v = &A(k + 1, k);          // the column below the diagonal, turned into v in place
+    const double* x = &A(k + 1, k);    // the column below the diagonal
     double tail = 0;
-    for (Eigen::Index i = 1; i < m; ++i) tail += v[i] * v[i];
+    for (Eigen::Index i = 1; i < m; ++i) tail += x[i] * x[i];
     diagonal[k] = A(k, k);
     if (tail == 0) {  // already tridiagonal in this column
-      subdiagonal[k] = v[0];
+      subdiagonal[k] = x[0];
       continue;
     }
-    const double norm = std::sqrt(v[0] * v[0] + tail);
-    const double alpha = v[0] > 0 ? -norm : norm;
+    const double norm = std::sqrt(x[0] * x[0] + tail);
+    const double alpha = x[0] > 0 ? -norm : norm;
     subdiagonal[k] = alpha;
+    std::copy(x, x + m, v);
     v[0] -= alpha;
     const double tau = 2.0 / (v[0] * v[0] + tail);
-    double* w = p.data();
-    std::fill(w, w + m, 0.0);
-    for (Eigen::Index j = 0; j < m; ++j) {  // w = τ A₂₂ v, column by column
-      const double* a = &A(k + 1, k + 1 + j);
-      const double s = tau * v[j];
-      for (Eigen::Index i = 0; i < m; ++i) w[i] += s * a[i];
-    }
+    double* a22 = &A(k + 1, k + 1);
+    symmetric_times(a22, lda, m, v, tau, w);
     double vw = 0;
     for (Eigen::Index i = 0; i < m; ++i) vw += v[i] * w[i];
     const double half = 0.5 * tau * vw;
     for (Eigen::Index i = 0; i < m; ++i) w[i] -= half * v[i];
-    for (Eigen::Index j = 0; j < m; ++j) {  // A₂₂ −= v wᵀ + w vᵀ
-      double* a = &A(k + 1, k + 1 + j);
-      const double vj = v[j], wj = w[j];
-      for (Eigen::Index i = 0; i < m; ++i) a[i] -= v[i] * wj + w[i] * vj;
-    }
+    symmetric_rank2_update(a22, lda, m, v, w);
   }
   if (n >= 2) {
     diagonal[n - 2] = A(n - 2, n - 2);
@@ -99,8 +123,27 @@ void times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, in
     times_block_diagonal_fixed<2>(P, D, out);
 }
 
-void invert_lower_factor(const Eigen::LLT<Eigen::MatrixXd>& chol, Eigen::MatrixXd& inverse) {
-  const Eigen::MatrixXd& L = chol.matrixLLT();  // its lower triangle is L
+bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
+  const Eigen::Index n = A.rows();
+  for (Eigen::Index j = 0; j < n; ++j)  // the lower triangle of A, column by column
+    std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
+  for (Eigen::Index k = 0; k < n; ++k) {  // right-looking: column k, then the trailing columns
+    const double pivot = L(k, k);
+    if (!(pivot > 0)) return false;
+    const double root = std::sqrt(pivot);
+    double* __restrict lk = &L(0, k);
+    lk[k] = root;
+    for (Eigen::Index i = k + 1; i < n; ++i) lk[i] /= root;
+    for (Eigen::Index j = k + 1; j < n; ++j) {
+      double* __restrict lj = &L(0, j);
+      const double factor = lk[j];
+      for (Eigen::Index i = j; i < n; ++i) lj[i] -= lk[i] * factor;
+    }
+  }
+  return true;
+}
+
+void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
   const Eigen::Index n = L.rows();
   inverse.setZero(n, n);
   for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j
@@ -116,29 +159,29 @@ void invert_lower_factor(const Eigen::LLT<Eigen::MatrixXd>& chol, Eigen::MatrixX
 }
 
 StepLength::StepLength(int n)
-    : G_(n, n), B_(n, n), trial_(n, n), test_(n), diagonal_(n), subdiagonal_(std::max(n - 1, 1)), work_(n) {}
+    : G_(n, n), B_(n, n), trial_(n, n), trial_factor_(n, n), test_(n), diagonal_(n), subdiagonal_(std::max(n - 1, 1)), work_(2 * n) {}
 
-double StepLength::full(const Eigen::MatrixXd& P, const Eigen::LLT<Eigen::MatrixXd>& chol,
-                        const Eigen::MatrixXd& inverse, const Eigen::MatrixXd& delta, double tau) {
+double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
+                        const Eigen::MatrixXd& delta, double tau) {
   double alpha;
   if (P.rows() <= kExactStepMaxSize) {
     G_.noalias() = inverse * delta;                // L⁻¹ Δ
     B_.noalias() = G_ * inverse.transpose();       // L⁻¹ Δ L⁻ᵀ
     alpha = from_min_eigenvalue_of_B(tau);
   } else {
-    const double lmin = lanczos_min_eig(chol, delta);
+    const double lmin = lanczos_min_eig(L, delta);
     alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   }
   return tau >= 1.0 ? alpha : confirm(P, delta, alpha);
 }
 
-double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::LLT<Eigen::MatrixXd>& chol,
-                                  const Eigen::MatrixXd& inverse, const Eigen::MatrixXd& D, int d, double tau) {
+double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
+                                  const Eigen::MatrixXd& D, int d, double tau) {
   const Eigen::Index n = P.rows();
   if (n > kExactStepMaxSize) {
     Eigen::MatrixXd delta = Eigen::MatrixXd::Zero(n, n);  // Δ in full for the Lanczos estimate
     for (Eigen::Index i = 0; i < n; i += d) delta.block(i, i, d, d) = D.middleRows(i, d).leftCols(d);
-    return full(P, chol, inverse, delta, tau);
+    return full(P, L, inverse, delta, tau);
   }
   times_block_diagonal(inverse, D, d, G_);  // L⁻¹ Δ, Δ = blkdiag(D)
   B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
@@ -156,7 +199,6 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::LLT<Eig
 // λ_min is bracketed by geometric bisection on Sturm counts to a relative width of 1e-4, and the
 // lower end of the bracket is used, so the step never exceeds τ α_max.
 double StepLength::from_min_eigenvalue_of_B(double tau) {
-  symmetrize(B_);
   tridiagonalize(B_, diagonal_, subdiagonal_, work_);
   if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
   double lo = -1.01 * gershgorin_radius(diagonal_, subdiagonal_), hi = -tau;  // λ_min ∈ [lo, hi)
@@ -169,7 +211,7 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
 
 // Smallest eigenvalue estimate of L⁻¹ Δ L⁻ᵀ by Lanczos (24 steps, full reorthogonalisation).
 // Ritz values lie inside the spectrum, so the caller verifies the step with a Cholesky test.
-double StepLength::lanczos_min_eig(const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& delta) {
+double StepLength::lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta) {
   const Eigen::Index n = delta.rows();
   const int k = static_cast<int>(std::min<Eigen::Index>(24, n));
   Eigen::MatrixXd V(n, k);  // Lanczos basis, n × k
@@ -180,9 +222,9 @@ double StepLength::lanczos_min_eig(const Eigen::LLT<Eigen::MatrixXd>& chol, cons
   int steps = 0;
   for (int j = 0; j < k; ++j) {
     V.col(j) = v;
-    Eigen::VectorXd w = chol.matrixU().solve(v);  // L⁻ᵀ v
+    Eigen::VectorXd w = L.triangularView<Eigen::Lower>().transpose().solve(v);  // L⁻ᵀ v
     w = delta * w;
-    chol.matrixL().solveInPlace(w);               // L⁻¹ Δ L⁻ᵀ v
+    L.triangularView<Eigen::Lower>().solveInPlace(w);                        // L⁻¹ Δ L⁻ᵀ v
     alpha[j] = v.dot(w);
     w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
     w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
@@ -209,6 +251,7 @@ double StepLength::confirm(const Eigen::MatrixXd& P, const Eigen::MatrixXd& delt
 }
 
 bool StepLength::positive_definite() {
+  if (trial_.rows() <= kExactStepMaxSize) return cholesky_lower(trial_, trial_factor_);
   test_.compute(trial_);
   return test_.info() == Eigen::Success;
 }

@@ -16,9 +16,14 @@ namespace fact::sdp::detail {
 // it a 24-step Lanczos estimate is verified by Cholesky tests.
 constexpr int kExactStepMaxSize = 48;
 
-// L⁻¹ for the lower-triangular Cholesky factor L (n × n) of an LLT, written into inverse
-// (n × n, lower triangular, upper part zero). Column-oriented forward substitution.
-void invert_lower_factor(const Eigen::LLT<Eigen::MatrixXd>& chol, Eigen::MatrixXd& inverse);
+// A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
+// (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
+// the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead.
+bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
+
+// L⁻¹ for a lower-triangular L (n × n, upper triangle ignored), written into inverse (n × n,
+// lower triangular, upper part zero). Column-oriented forward substitution.
+void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 
 // A ← (A + Aᵀ)/2 in place (n × n).
 void symmetrize(Eigen::MatrixXd& A);
@@ -31,27 +36,28 @@ class StepLength {
  public:
   explicit StepLength(int n);
 
-  // min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. chol is P's Cholesky
-  // factorisation, inverse its L⁻¹. With τ < 1 the result is confirmed by a Cholesky test
+  // min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. L is P's Cholesky factor
+  // (lower triangle), inverse its L⁻¹ (only read for n ≤ kExactStepMaxSize). With τ < 1 the result is confirmed by a Cholesky test
   // of P + αΔ (α shrunk by 0.7 until it passes; 0 when 30 tries fail).
-  double full(const Eigen::MatrixXd& P, const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& inverse,
+  double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
               const Eigen::MatrixXd& delta, double tau);
 
   // The same for a block-diagonal Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d).
-  double block_diagonal(const Eigen::MatrixXd& P, const Eigen::LLT<Eigen::MatrixXd>& chol,
-                        const Eigen::MatrixXd& inverse, const Eigen::MatrixXd& D, int d, double tau);
+  double block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
+                        const Eigen::MatrixXd& D, int d, double tau);
 
  private:
   double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bracket λ_min
-  double lanczos_min_eig(const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& delta);
+  double lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta);
   double confirm(const Eigen::MatrixXd& P, const Eigen::MatrixXd& delta, double alpha);  // shrink α until trial_ ≻ 0
   bool positive_definite();  // Cholesky test of trial_
 
   Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
   Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n; overwritten by the tridiagonalisation
-  Eigen::MatrixXd trial_;  // P + αΔ for the Cholesky test, n × n
-  Eigen::LLT<Eigen::MatrixXd> test_;
-  Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and a scratch n-vector
+  Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
+  Eigen::MatrixXd trial_factor_;  // its factor on the small path (cholesky_lower), n × n
+  Eigen::LLT<Eigen::MatrixXd> test_;  // its factorisation on the large path
+  Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
 };
 
 }  // namespace fact::sdp::detail
