@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "internal.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 namespace {
@@ -31,33 +32,26 @@ std::vector<Entry> constraint_entries(int n, int d) {
   return entries;
 }
 
-// A(W) for symmetric or general W: m-vector.
-Eigen::VectorXd apply_A(const Eigen::MatrixXd& W, const std::vector<Entry>& entries) {
-  Eigen::VectorXd out(entries.size());
-  for (std::size_t p = 0; p < entries.size(); ++p) {
-    const auto [u, v] = entries[p];
-    out[p] = u == v ? W(u, u) : W(u, v) + W(v, u);
-  }
-  return out;
-}
-
-// Λ (n × d, blocks stacked) from y.
-Eigen::MatrixXd lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, int n, int d) {
-  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(n, d);
+// Λ (n × d, blocks stacked) from y; every entry of lambda is written.
+void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, int d, Eigen::MatrixXd& lambda) {
   for (std::size_t p = 0; p < entries.size(); ++p) {
     const auto [u, v] = entries[p];
     lambda(u, v % d) = y[p];
     lambda(v, u % d) = y[p];
   }
-  return lambda;
+}
+
+// Z = C − blkdiag(Λ), n × n.
+void dual_slack(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& Z) {
+  Z = C;
+  for (Eigen::Index i = 0; i < C.rows(); i += d) Z.block(i, i, d, d) -= lambda.middleRows(i, d);
 }
 
 // Schur complement M_pq = tr(A_p X A_q W), m × m, with W = Z⁻¹.
 // For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα.
-Eigen::MatrixXd schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W,
-                                 const std::vector<Entry>& entries) {
+void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
+                      Eigen::MatrixXd& M) {
   const int m = static_cast<int>(entries.size());
-  Eigen::MatrixXd M(m, m);
   for (int p = 0; p < m; ++p) {
     const auto [u, v] = entries[p];
     for (int q = p; q < m; ++q) {
@@ -75,93 +69,62 @@ Eigen::MatrixXd schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd
       M(p, q) = M(q, p) = value;
     }
   }
-  return M;
 }
 
-// (P · blkdiag(D)) for P n × n and D stacked n × d: O(n² d).
-Eigen::MatrixXd times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, int d) {
-  Eigen::MatrixXd out(P.rows(), P.cols());
-  for (Eigen::Index i = 0; i < P.cols(); i += d)
-    out.middleCols(i, d).noalias() = P.middleCols(i, d) * D.middleRows(i, d);
-  return out;
+// A(P W) for P n × n: only the d × d diagonal blocks of P W are formed, O(n² d).
+void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
+                        Eigen::VectorXd& out) {
+  for (std::size_t p = 0; p < entries.size(); ++p) {
+    const auto [u, v] = entries[p];
+    const double uv = P.row(u).dot(W.col(v));
+    out[p] = u == v ? uv : uv + P.row(v).dot(W.col(u));
+  }
 }
 
-// Smallest eigenvalue estimate of L⁻¹ Δ L⁻ᵀ by Lanczos (k steps, full reorthogonalisation).
-// Ritz values lie inside the spectrum, so the caller verifies the step with a Cholesky test.
-double lanczos_min_eig(const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& delta, int k) {
-  const Eigen::Index n = delta.rows();
-  k = static_cast<int>(std::min<Eigen::Index>(k, n));
-  Eigen::MatrixXd V(n, k);  // Lanczos basis, n × k
-  Eigen::VectorXd alpha(k), beta(k);
-  Eigen::VectorXd v = Eigen::VectorXd::Ones(n) / std::sqrt(static_cast<double>(n));
-  for (Eigen::Index i = 0; i < n; ++i) v[i] += 1e-3 * std::sin(1.0 + 7.0 * i);  // avoid symmetric starts
-  v.normalize();
-  int steps = 0;
-  for (int j = 0; j < k; ++j) {
-    V.col(j) = v;
-    Eigen::VectorXd w = chol.matrixU().solve(v);  // L⁻ᵀ v
-    w = delta * w;
-    chol.matrixL().solveInPlace(w);               // L⁻¹ Δ L⁻ᵀ v
-    alpha[j] = v.dot(w);
-    w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
-    w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
-    beta[j] = w.norm();
-    steps = j + 1;
-    if (beta[j] < 1e-12) break;
-    v = w / beta[j];
-  }
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(steps, steps);  // tridiagonal Lanczos matrix
-  for (int j = 0; j < steps; ++j) {
-    T(j, j) = alpha[j];
-    if (j + 1 < steps) T(j, j + 1) = T(j + 1, j) = beta[j];
-  }
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues()(0);
+// Every n × n, m × m and n × d matrix of one interior-point iteration, allocated once.
+// n = matrix size, m = number of constraints, d = block size.
+struct Workspace {
+  Workspace(int n, int m, int d)
+      : chol_x(n), chol_z(n), Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
+        dx(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
+  Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n), large n
+  Eigen::MatrixXd Lx, Lz;                      // the same factors for small n (cholesky_lower, n × n)
+  Eigen::LLT<Eigen::MatrixXd> chol_m;          // the Schur complement's factorisation (m × m)
+  Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
+  Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
+  Eigen::MatrixXd M;                           // Schur complement (m × m)
+  Eigen::MatrixXd P;                           // scratch n × n product, multiplied by W
+  Eigen::MatrixXd dx_aff, dx;                  // predictor / corrector primal directions (n × n)
+  Eigen::MatrixXd dz_aff, dz;                  // dual directions ΔZ = −Aᵀ(Δy), diagonal blocks stacked (n × d)
+  Eigen::VectorXd rhs, dy_aff, dy;             // Schur right-hand side and dual directions (m)
+  StepLength steps;                            // step-length work matrices
+};
+
+// Cholesky factors of X and Z: plain loops into ws.Lx, ws.Lz for small n, Eigen's LLT otherwise.
+bool factorize(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Z, bool small, Workspace& ws) {
+  if (small) return cholesky_lower(Z, ws.Lz) && cholesky_lower(X, ws.Lx);
+  ws.chol_z.compute(Z);
+  ws.chol_x.compute(X);
+  return ws.chol_z.info() == Eigen::Success && ws.chol_x.info() == Eigen::Success;
 }
 
-// Number of eigenvalues below x of the symmetric tridiagonal (diag a, off-diagonal b): Sturm count.
-int eigenvalues_below(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double x) {
-  int count = 0;
-  double q = a[0] - x;
-  if (q < 0) ++count;
-  for (Eigen::Index i = 1; i < a.size(); ++i) {
-    if (q == 0) q = 1e-300;
-    q = a[i] - x - b[i - 1] * b[i - 1] / q;
-    if (q < 0) ++count;
-  }
-  return count;
+// The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n).
+void primal_direction(const Eigen::MatrixXd& X, double sigma_mu, Workspace& ws, Eigen::MatrixXd& dx) {
+  dx.noalias() = -ws.P * ws.W;
+  dx -= X;
+  if (sigma_mu != 0) dx += sigma_mu * ws.W;
+  symmetrize(dx);
 }
 
-// Smallest eigenvalue of L⁻¹ Δ L⁻ᵀ (small n): Householder tridiagonalisation, then bisection
-// on the Sturm count to a relative accuracy of 1e-6 of the spectral radius bound.
-double exact_min_eig(const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& delta) {
-  const Eigen::MatrixXd LinvD = chol.matrixL().solve(delta);                           // L⁻¹ Δ
-  const Eigen::MatrixXd B = chol.matrixL().solve(Eigen::MatrixXd(LinvD.transpose()));  // L⁻¹ Δ L⁻ᵀ
-  const Eigen::Tridiagonalization<Eigen::MatrixXd> tri(0.5 * (B + B.transpose()));
-  const Eigen::VectorXd a = tri.diagonal(), b = tri.subDiagonal();
-  double radius = 0;  // Gershgorin bound on |λ|
-  for (Eigen::Index i = 0; i < a.size(); ++i)
-    radius = std::max(radius, std::abs(a[i]) + (i > 0 ? std::abs(b[i - 1]) : 0.0) +
-                                  (i + 1 < a.size() ? std::abs(b[i]) : 0.0));
-  double lo = -radius, hi = radius;
-  while (hi - lo > 1e-6 * radius) {
-    const double mid = 0.5 * (lo + hi);
-    (eigenvalues_below(a, b, mid) > 0 ? hi : lo) = mid;
+// ⟨X + a ΔX, Z + b ΔZ⟩ with ΔZ = blkdiag(dz): the complementarity after a step.
+double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx, double a, const Eigen::MatrixXd& Z,
+                             const Eigen::MatrixXd& dz, double b, int d) {
+  double value = X.cwiseProduct(Z).sum() + a * dx.cwiseProduct(Z).sum();
+  for (Eigen::Index i = 0; i < X.rows(); i += d) {
+    const auto block = dz.middleRows(i, d).leftCols(d);
+    value += b * (X.block(i, i, d, d) + a * dx.block(i, i, d, d)).cwiseProduct(block).sum();
   }
-  return lo;
-}
-
-// Largest α ≤ 1 with P + α Δ ≻ 0 (times the fraction τ), given the Cholesky factor of P.
-double step_length(const Eigen::MatrixXd& P, const Eigen::LLT<Eigen::MatrixXd>& chol, const Eigen::MatrixXd& delta,
-                   double tau) {
-  const bool small = P.rows() <= 48;
-  const double lmin = small ? exact_min_eig(chol, delta) : lanczos_min_eig(chol, delta, 24);
-  double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
-  if (tau >= 1.0) return alpha;  // predictor: only used to estimate μ, may touch the boundary
-  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
-    Eigen::LLT<Eigen::MatrixXd> test(P + alpha * delta);
-    if (test.info() == Eigen::Success) return alpha;
-  }
-  return 0.0;
+  return value;
 }
 
 }  // namespace
@@ -174,73 +137,107 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   for (int p = 0; p < m; ++p) b[p] = entries[p].u == entries[p].v ? 1.0 : 0.0;
 
   InteriorPointOutcome out;
+  Workspace ws(n, m, d);
+  const bool exact_steps = n <= kExactStepMaxSize;  // L⁻¹ of X is only needed by the exact step length
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
   Eigen::VectorXd y = -2.0 * b;                          // dual, m
-  Eigen::MatrixXd lambda = lambda_from_y(y, entries, n, d);
-  Eigen::MatrixXd Z = certificate_matrix(C, lambda, d);  // dual slack, n × n
+  Eigen::MatrixXd lambda(n, d);                          // Aᵀ(y) as stacked d × d blocks, n × d
+  lambda_from_y(y, entries, d, lambda);
+  Eigen::MatrixXd Z(n, n);                               // dual slack C − Aᵀ(y), n × n
+  dual_slack(C, lambda, d, Z);
   const double tau = 0.95;
 
-  double best_gap = std::numeric_limits<double>::infinity();
+  // The iterate with the smallest gap so far: once rounding limits the last digits the gap
+  // can grow again, and the polish in solve.cpp starts from the best iterate.
+  double best_gap = std::numeric_limits<double>::infinity(), best_rel_gap = best_gap;
+  Eigen::MatrixXd best_X = X;  // n × n
+  Eigen::VectorXd best_y = y;  // m
+  double halved_gap = best_gap;
   int stalled = 0;  // iterations since the gap last halved
   for (int it = 0; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
     const double gap = X.cwiseProduct(Z).sum();
     const double rel_gap = gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
+    const bool grew = gap >= best_gap;
+    if (!grew) {
+      best_gap = gap;
+      best_rel_gap = rel_gap;
+      best_X = X;
+      best_y = y;
+    }
     if (rel_gap < 0.1 * options.gap_tol) {
       out.converged = true;
       break;
     }
-    if (gap < 0.5 * best_gap) {
-      best_gap = gap;
+    if (gap < 0.5 * halved_gap) {
+      halved_gap = gap;
       stalled = 0;
-    } else if (++stalled >= 4) {  // rounding now limits the last digits
+    } else {
+      ++stalled;
+    }
+    // Rounding now limits the last digits: the gap grew near the end, or has not halved in 4 iterations.
+    if ((grew && best_rel_gap < 1e-6) || stalled >= 4) {
       std::ostringstream why;
-      why << "interior point stalled at relative gap " << rel_gap << " after " << it + 1 << " iterations";
+      why << "interior point stalled at relative gap " << best_rel_gap << " after " << it + 1 << " iterations";
       out.reason = why.str();
       break;
     }
     const double mu = gap / n;
-    const Eigen::LLT<Eigen::MatrixXd> chol_z(Z), chol_x(X);
-    if (chol_z.info() != Eigen::Success || chol_x.info() != Eigen::Success) {
+    if (!factorize(X, Z, exact_steps, ws)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
-    const Eigen::MatrixXd W = chol_z.solve(Eigen::MatrixXd::Identity(n, n));  // Z⁻¹
-    const Eigen::LLT<Eigen::MatrixXd> chol_m(schur_complement(X, W, entries));
-    if (chol_m.info() != Eigen::Success) {
+    const Eigen::MatrixXd& Lx = exact_steps ? ws.Lx : ws.chol_x.matrixLLT();  // lower triangles are the factors
+    const Eigen::MatrixXd& Lz = exact_steps ? ws.Lz : ws.chol_z.matrixLLT();
+    invert_lower_factor(Lz, ws.Lz_inv);
+    ws.W.noalias() = ws.Lz_inv.transpose() * ws.Lz_inv;  // Z⁻¹
+    if (exact_steps) invert_lower_factor(Lx, ws.Lx_inv);
+    schur_complement(X, ws.W, entries, ws.M);
+    ws.chol_m.compute(ws.M);
+    if (ws.chol_m.info() != Eigen::Success) {
       out.reason = "Schur complement not positive definite at iteration " + std::to_string(it);
       break;
     }
-    // Predictor (σ = 0): T = −X, rhs = A(X) = b.
-    const Eigen::VectorXd dy_aff = chol_m.solve(b);
-    const Eigen::MatrixXd dz_aff = -lambda_from_y(dy_aff, entries, n, d);  // ΔZ = −Aᵀ(Δy), stacked blocks
-    const Eigen::MatrixXd x_dz_aff = times_block_diagonal(X, dz_aff, d);    // X ΔZ, n × n
-    Eigen::MatrixXd dx_aff = -X - x_dz_aff * W;
-    dx_aff = 0.5 * (dx_aff + dx_aff.transpose()).eval();
-    const Eigen::MatrixXd dz_aff_full = certificate_matrix(Eigen::MatrixXd::Zero(n, n), -dz_aff, d);
-    const double ap_aff = step_length(X, chol_x, dx_aff, 1.0), ad_aff = step_length(Z, chol_z, dz_aff_full, 1.0);
-    const double mu_aff = (X + ap_aff * dx_aff).cwiseProduct(Z + ad_aff * dz_aff_full).sum() / n;
+    // Predictor (σ = 0): T = −X, M Δy = A(X) = b; ΔX = −X − X ΔZ W.
+    ws.dy_aff = ws.chol_m.solve(b);
+    lambda_from_y(ws.dy_aff, entries, d, ws.dz_aff);
+    ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
+    times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
+    primal_direction(X, 0.0, ws, ws.dx_aff);
+    const double ap_aff = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx_aff, 1.0);
+    const double ad_aff = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
+    const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
     const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
-    // Corrector: T = σμW − X − ΔX_a ΔZ_a W; M Δy = −A(T).
-    const Eigen::MatrixXd dxa_dza = times_block_diagonal(dx_aff, dz_aff, d);  // ΔX_a ΔZ_a
-    const Eigen::MatrixXd corr = dxa_dza * W;
-    const Eigen::MatrixXd T = sigma * mu * W - X - corr;
-    const Eigen::VectorXd dy = chol_m.solve(-apply_A(T, entries));
-    const Eigen::MatrixXd dz = -lambda_from_y(dy, entries, n, d);
-    Eigen::MatrixXd dx = T - times_block_diagonal(X, dz, d) * W;
-    dx = 0.5 * (dx + dx.transpose()).eval();
-    const Eigen::MatrixXd dz_full = certificate_matrix(Eigen::MatrixXd::Zero(n, n), -dz, d);
-    const double ap = step_length(X, chol_x, dx, tau), ad = step_length(Z, chol_z, dz_full, tau);
+    // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
+    // A(T) needs only T's diagonal blocks: A(σμW − X) − A((ΔX_a ΔZ_a) W).
+    times_block_diagonal(ws.dx_aff, ws.dz_aff, d, ws.P);  // ΔX_a ΔZ_a
+    apply_A_to_product(ws.P, ws.W, entries, ws.rhs);
+    for (int p = 0; p < m; ++p) {
+      const auto [u, v] = entries[p];
+      const double t_uv = sigma * mu * ws.W(u, v) - X(u, v);
+      ws.rhs[p] -= u == v ? t_uv : 2.0 * t_uv;  // rhs = −A(T)
+    }
+    ws.dy = ws.chol_m.solve(ws.rhs);
+    lambda_from_y(ws.dy, entries, d, ws.dz);
+    ws.dz = -ws.dz;
+    // ΔX = σμW − X − (ΔX_a ΔZ_a + X ΔZ) W: one n × n product with W.
+    times_block_diagonal(X, ws.dz, d, ws.dx);  // X ΔZ, through dx as scratch
+    ws.P += ws.dx;
+    primal_direction(X, sigma * mu, ws, ws.dx);
+    const double ap = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx, tau);
+    const double ad = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz, d, tau);
     if (ap == 0.0 && ad == 0.0) {
       out.reason = "interior point stalled at iteration " + std::to_string(it);
       break;
     }
-    X += ap * dx;
-    y += ad * dy;
-    lambda = lambda_from_y(y, entries, n, d);
-    Z = certificate_matrix(C, lambda, d);
+    X += ap * ws.dx;
+    y += ad * ws.dy;
+    lambda_from_y(y, entries, d, lambda);
+    dual_slack(C, lambda, d, Z);
   }
+  X = best_X;
+  lambda_from_y(best_y, entries, d, lambda);
   // Undo rounding drift: X ← D^{-1/2} X D^{-1/2}, D = blkdiag(X_ii), so every block is I again.
   for (int i = 0; i < n; i += d) {
     const Eigen::MatrixXd root = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X.block(i, i, d, d)).operatorInverseSqrt();

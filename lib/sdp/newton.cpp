@@ -15,29 +15,123 @@
 namespace fact::sdp::detail {
 namespace {
 
-// Orthonormal basis of the tangent space at block Y_i (d × r): t matrices d × r.
-std::vector<Eigen::MatrixXd> tangent_basis(const Eigen::MatrixXd& Yi) {
-  const Eigen::Index d = Yi.rows(), r = Yi.cols();
-  std::vector<Eigen::MatrixXd> basis;
-  if (d == 2) {
-    Eigen::Matrix2d omega;  // skew, unit Frobenius norm
-    omega << 0, -M_SQRT1_2, M_SQRT1_2, 0;
-    basis.push_back(omega * Yi);
+// Every matrix of one Newton run at fixed rank, allocated once. n = d·N rows, r columns,
+// t tangent directions per block.
+struct NewtonWorkspace {
+  NewtonWorkspace(Eigen::Index n, int d, Eigen::Index r, int blocks, int t)
+      : CY(n, r), lambda(n, d), S(n, n), SY(n, r), basis(n, r * t), Bc(n, t), SB(n, blocks * t), g(blocks * t),
+        H(blocks * t, blocks * t), shifted(blocks * t, blocks * t), ldlt(blocks * t), eta(blocks * t), next(n, r),
+        next_CY(n, r), Q(r, r) {}
+  Eigen::MatrixXd CY;       // C Y for the current Y, n × r
+  Eigen::MatrixXd lambda;   // Λ(Y) = SymBlockDiag(C Y Yᵀ), d × d blocks stacked, n × d
+  Eigen::MatrixXd S;        // C − blkdiag(Λ), n × n
+  Eigen::MatrixXd SY;       // S Y, n × r
+  Eigen::MatrixXd basis;    // tangent basis: direction a of block i is basis.block(d·i, r·a, d, r), n × r·t
+  Eigen::MatrixXd Bc;       // column c of every basis matrix: Bc(d·i + k, a) = basis(d·i + k, r·a + c), n × t
+  Eigen::MatrixXd SB;       // S times the block-diagonal matrix of the Bc blocks, n × N·t
+  Eigen::VectorXd g;        // gradient coefficients, N·t
+  Eigen::MatrixXd H;        // Hessian in the tangent bases, N·t × N·t
+  Eigen::MatrixXd shifted;  // H + μI, N·t × N·t
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  Eigen::VectorXd eta;      // Newton step coefficients, N·t
+  Eigen::MatrixXd next;     // trial factor, n × r
+  Eigen::MatrixXd next_CY;  // C · next, n × r
+  Eigen::MatrixXd Q;        // r × r orthogonal factor of the QR of Y_iᵀ
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
+};
+
+// Orthonormal basis of the tangent space at block Y_i = Y.middleRows(row, d) into ws.basis:
+// for d = 2 first Ω Y_i (Ω skew, unit Frobenius norm), then for r > d the matrices with one
+// row equal to a column of N_iᵀ (N_i: r × (r − d), orthonormal, Y_i N_i = 0).
+void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWorkspace& ws) {
+  const Eigen::Index r = Y.cols();
+  Eigen::Index a = 0;
+  if (d == 2) {  // Ω = [[0, −1/√2], [1/√2, 0]]
+    ws.basis.block(row, 0, 1, r) = -M_SQRT1_2 * Y.row(row + 1);
+    ws.basis.block(row + 1, 0, 1, r) = M_SQRT1_2 * Y.row(row);
+    a = 1;
   }
-  if (r > d) {
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(Yi.transpose());  // r × d
-    const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(r, r);
-    for (Eigen::Index a = 0; a < d; ++a)
-      for (Eigen::Index b = d; b < r; ++b) {
-        Eigen::MatrixXd e = Eigen::MatrixXd::Zero(d, r);
-        e.row(a) = Q.col(b).transpose();
-        basis.push_back(e);
-      }
-  }
-  return basis;
+  if (r == d) return;
+  ws.qr.compute(Y.middleRows(row, d).transpose());  // r × d
+  ws.Q = ws.qr.householderQ();
+  for (Eigen::Index k = 0; k < d; ++k)
+    for (Eigen::Index b = d; b < r; ++b, ++a) {
+      ws.basis.block(row, r * a, d, r).setZero();
+      ws.basis.block(row + k, r * a, 1, r) = ws.Q.col(b).transpose();
+    }
 }
 
-double cost(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y) { return (Y.transpose() * C * Y).trace(); }
+// Λ = SymBlockDiag(C Y Yᵀ) from ws.CY, then S = C − blkdiag(Λ) and S Y = C Y − blkdiag(Λ) Y.
+void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, NewtonWorkspace& ws) {
+  ws.S = C;
+  for (Eigen::Index i = 0; i < C.rows(); i += d) {
+    const Eigen::MatrixXd::ConstRowsBlockXpr Yi = Y.middleRows(i, d);
+    auto lambda = ws.lambda.middleRows(i, d);
+    lambda.noalias() = ws.CY.middleRows(i, d) * Yi.transpose();
+    for (int a = 0; a < d; ++a)
+      for (int b = a + 1; b < d; ++b) lambda(a, b) = lambda(b, a) = 0.5 * (lambda(a, b) + lambda(b, a));
+    ws.S.block(i, i, d, d) -= lambda;
+    ws.SY.middleRows(i, d) = ws.CY.middleRows(i, d);
+    ws.SY.middleRows(i, d).noalias() -= lambda * Yi;
+  }
+}
+
+// H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the D × t matrices Bc_i (column c of
+// every basis matrix of block i): entry (i a, j b) is 2⟨B_ia, S_ij B_jb⟩. D = d as a
+// compile-time size, so the products with inner dimension D are small fixed-size kernels.
+template <int D>
+void hessian(Eigen::Index r, int blocks, int t, NewtonWorkspace& ws) {
+  ws.H.setZero();
+  for (Eigen::Index c = 0; c < r; ++c) {
+    for (int a = 0; a < t; ++a) ws.Bc.col(a) = ws.basis.col(r * a + c);
+    for (int j = 0; j < blocks; ++j)
+      ws.SB.middleCols(j * t, t).noalias() = ws.S.middleCols<D>(j * D) * ws.Bc.middleRows<D>(j * D);
+    for (int i = 0; i < blocks; ++i)
+      ws.H.middleRows(i * t, t).noalias() += ws.Bc.middleRows<D>(i * D).transpose() * ws.SB.middleRows<D>(i * D);
+  }
+  ws.H *= 2.0;
+  for (Eigen::Index q = 0; q < ws.H.cols(); ++q)
+    for (Eigen::Index p = q + 1; p < ws.H.rows(); ++p) ws.H(p, q) = ws.H(q, p) = 0.5 * (ws.H(p, q) + ws.H(q, p));
+}
+
+// Rows row … row + d − 1 of Y replaced by their nearest orthonormal rows (polar factor);
+// the d = 2 case in closed form (as polar_rows), the rank-deficient case through polar_rows.
+void retract_rows(Eigen::MatrixXd& Y, Eigen::Index row, int d) {
+  auto G = Y.middleRows(row, d);
+  if (d == 1) {
+    const double norm = G.norm();
+    if (norm > 0) G /= norm;
+    return;
+  }
+  const double m00 = G.row(0).squaredNorm(), m11 = G.row(1).squaredNorm(), m01 = G.row(0).dot(G.row(1));
+  const double det = m00 * m11 - m01 * m01, tr = m00 + m11;
+  if (!(det > 1e-20 * tr * tr)) {
+    const Eigen::MatrixXd polar = polar_rows(G);
+    if (polar.size() > 0) G = polar;
+    return;
+  }
+  // √M = (M + √det I)/t, t = √(tr M + 2√det); (√M)⁻¹ = t/det(√M+…) · adj: here det(√M) = √det.
+  const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
+  const double r00 = (m00 + s) / t, r11 = (m11 + s) / t, r01 = m01 / t, det_root = r00 * r11 - r01 * r01;
+  const double i00 = r11 / det_root, i11 = r00 / det_root, i01 = -r01 / det_root;
+  for (Eigen::Index k = 0; k < G.cols(); ++k) {
+    const double x = G(0, k), y = G(1, k);
+    G(0, k) = i00 * x + i01 * y;
+    G(1, k) = i01 * x + i11 * y;
+  }
+}
+
+// ws.next = retraction of Y + Σ η_ia B_ia, block by block; returns ⟨C, next nextᵀ⟩ (ws.next_CY = C next).
+double trial_step(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, int blocks, int t, NewtonWorkspace& ws) {
+  const Eigen::Index r = Y.cols();
+  ws.next = Y;
+  for (int i = 0; i < blocks; ++i) {
+    for (int a = 0; a < t; ++a) ws.next.middleRows(i * d, d) += ws.eta[i * t + a] * ws.basis.block(i * d, r * a, d, r);
+    retract_rows(ws.next, i * d, d);
+  }
+  ws.next_CY.noalias() = C * ws.next;
+  return ws.next.cwiseProduct(ws.next_CY).sum();
+}
 
 }  // namespace
 
@@ -45,42 +139,34 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
   const Eigen::Index n = C.rows(), r = Y.cols();
   const int blocks = static_cast<int>(n / d), t = static_cast<int>(d * r - d * (d + 1) / 2);
   if (t == 0) return 0;
+  NewtonWorkspace ws(n, d, r, blocks, t);
   double mu = 1e-8;  // Levenberg–Marquardt damping on the Newton system
-  double f = cost(C, Y);
+  ws.CY.noalias() = C * Y;
+  double f = Y.cwiseProduct(ws.CY).sum();  // ⟨C, Y Yᵀ⟩
   const double noise = 100.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * C.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    const Eigen::MatrixXd S = certificate_matrix(C, lambda_from_factor(C, Y, d), d);  // n × n
-    const Eigen::MatrixXd SY = S * Y;                                                // n × r
-    std::vector<std::vector<Eigen::MatrixXd>> basis(blocks);
-    for (int i = 0; i < blocks; ++i) basis[i] = tangent_basis(Y.middleRows(i * d, d));
-    Eigen::VectorXd g(blocks * t);  // gradient coefficients
-    for (int i = 0; i < blocks; ++i)
-      for (int a = 0; a < t; ++a) g[i * t + a] = 2.0 * basis[i][a].cwiseProduct(SY.middleRows(i * d, d)).sum();
-    if (g.norm() < grad_tol) break;
-    Eigen::MatrixXd H(blocks * t, blocks * t);  // Hessian in the tangent bases, Nt × Nt
-    for (int j = 0; j < blocks; ++j)
-      for (int b = 0; b < t; ++b) {
-        const Eigen::MatrixXd SB = S.middleCols(j * d, d) * basis[j][b];  // n × r: S_{:,j} B_jb
-        for (int i = 0; i < blocks; ++i)
-          for (int a = 0; a < t; ++a)
-            H(i * t + a, j * t + b) = 2.0 * basis[i][a].cwiseProduct(SB.middleRows(i * d, d)).sum();
-      }
-    H = 0.5 * (H + H.transpose()).eval();
+    certificate_at(C, Y, d, ws);
+    for (int i = 0; i < blocks; ++i) tangent_basis(Y, i * d, d, ws);
+    for (int i = 0; i < blocks; ++i)  // gradient coefficients 2⟨B_ia, (S Y)_i⟩
+      for (int a = 0; a < t; ++a)
+        ws.g[i * t + a] = 2.0 * ws.basis.block(i * d, r * a, d, r).cwiseProduct(ws.SY.middleRows(i * d, d)).sum();
+    if (ws.g.norm() < grad_tol) break;
+    if (d == 1)
+      hessian<1>(r, blocks, t, ws);
+    else
+      hessian<2>(r, blocks, t, ws);
     bool stepped = false;
     for (int tries = 0; tries < 12 && !stepped; ++tries, mu *= 10) {
-      Eigen::LDLT<Eigen::MatrixXd> ldlt(H + mu * Eigen::MatrixXd::Identity(blocks * t, blocks * t));
-      if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all()) continue;
-      const Eigen::VectorXd eta = ldlt.solve(-g);
-      Eigen::MatrixXd next = Y;
-      for (int i = 0; i < blocks; ++i) {
-        Eigen::MatrixXd step = Eigen::MatrixXd::Zero(d, r);
-        for (int a = 0; a < t; ++a) step += eta[i * t + a] * basis[i][a];
-        next.middleRows(i * d, d) = polar_rows(Y.middleRows(i * d, d) + step);
-      }
-      const double f_next = cost(C, next);
+      ws.shifted = ws.H;
+      ws.shifted.diagonal().array() += mu;
+      ws.ldlt.compute(ws.shifted);
+      if (ws.ldlt.info() != Eigen::Success || !(ws.ldlt.vectorD().array() > 0).all()) continue;
+      ws.eta = ws.ldlt.solve(-ws.g);
+      const double f_next = trial_step(C, Y, d, blocks, t, ws);
       if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
-        Y = next;
+        Y.swap(ws.next);
+        ws.CY.swap(ws.next_CY);
         f = f_next;
         stepped = true;
         mu = std::max(1e-12, mu / 100);

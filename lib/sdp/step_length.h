@@ -1,0 +1,63 @@
+// Step lengths of the interior point: how far P + αΔ stays positive definite, for P = X (the
+// primal, n × n) or P = Z (the dual slack, n × n) and a symmetric search direction Δ (n × n).
+//
+// With P = L Lᵀ, P + αΔ ≻ 0  ⇔  I + α B ≻ 0  for  B = L⁻¹ Δ L⁻ᵀ (n × n, symmetric), so the
+// boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n, B is
+// reduced to a tridiagonal matrix (Householder) and λ_min is bracketed by Sturm counts; for
+// large n a Lanczos estimate is used. All work matrices live in a StepLength object that
+// the interior point allocates once.
+#pragma once
+
+#include <Eigen/Dense>
+
+namespace fact::sdp::detail {
+
+// Largest n for which the step length is computed exactly (tridiagonalisation, O(n³)); above
+// it a 24-step Lanczos estimate is verified by Cholesky tests.
+constexpr int kExactStepMaxSize = 48;
+
+// A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
+// (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
+// the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead.
+bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
+
+// L⁻¹ for a lower-triangular L (n × n, upper triangle ignored), written into inverse (n × n,
+// lower triangular, upper part zero). Column-oriented forward substitution.
+void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
+
+// A ← (A + Aᵀ)/2 in place (n × n).
+void symmetrize(Eigen::MatrixXd& A);
+
+// out = P · blkdiag(D) for P n × n and D the d × d diagonal blocks stacked (n × d): O(n² d).
+// out must already be n × n and must not alias P.
+void times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, int d, Eigen::MatrixXd& out);
+
+class StepLength {
+ public:
+  explicit StepLength(int n);
+
+  // min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. L is P's Cholesky factor
+  // (lower triangle), inverse its L⁻¹ (only read for n ≤ kExactStepMaxSize). With τ < 1 the result is confirmed by a Cholesky test
+  // of P + αΔ (α shrunk by 0.7 until it passes; 0 when 30 tries fail).
+  double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
+              const Eigen::MatrixXd& delta, double tau);
+
+  // The same for a block-diagonal Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d).
+  double block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
+                        const Eigen::MatrixXd& D, int d, double tau);
+
+ private:
+  double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bracket λ_min
+  double lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta);
+  double confirm(const Eigen::MatrixXd& P, const Eigen::MatrixXd& delta, double alpha);  // shrink α until trial_ ≻ 0
+  bool positive_definite();  // Cholesky test of trial_
+
+  Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
+  Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n; overwritten by the tridiagonalisation
+  Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
+  Eigen::MatrixXd trial_factor_;  // its factor on the small path (cholesky_lower), n × n
+  Eigen::LLT<Eigen::MatrixXd> test_;  // its factorisation on the large path
+  Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
+};
+
+}  // namespace fact::sdp::detail
