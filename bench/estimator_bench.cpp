@@ -132,6 +132,23 @@ fact::SimOptions depth_sim(int n, int rounds, std::uint64_t seed) {
   return o;
 }
 
+// The robustness setting: depth_sim plus 0.3 false positives per drone per round, 10 % missed
+// detections and 3 random obstacles in a room of at least 6 m.
+fact::SimOptions robust_sim(int n, int rounds, std::uint64_t seed) {
+  fact::SimOptions o = depth_sim(n, rounds, seed);
+  o.room = std::max(6.0, room_for(n));
+  o.false_positives = 0.3;
+  o.miss_rate = 0.1;
+  o.obstacles = 3;
+  return o;
+}
+
+// `sizes` without those above --max-n.
+std::vector<int> sizes_up_to(std::vector<int> sizes, int max_n) {
+  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [&](int n) { return n > max_n; }), sizes.end());
+  return sizes;
+}
+
 // The estimator told the depth camera's calibration, as a user would configure it for this sensor:
 // the scenario's range σ = 0.008 d² and bearing σ = 0.005 rad, a 5 mm centring floor, and a VIO
 // without drift (these scenarios have none). The default NoiseModel instead allows for a field
@@ -615,8 +632,8 @@ int scenarios_for(const Args& a, int n) {
 }
 
 void modes_table(const Args& a, Summary& sum) {
-  std::vector<int> sizes = a.quick ? std::vector<int>{2, 3, 4, 6, 8} : std::vector<int>{2, 3, 4, 6, 8, 12, 16, 24, 32};
-  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [&](int n) { return n > a.max_n; }), sizes.end());
+  const std::vector<int> sizes =
+      sizes_up_to(a.quick ? std::vector<int>{2, 3, 4, 6, 8} : std::vector<int>{2, 3, 4, 6, 8, 12, 16, 24, 32}, a.max_n);
   const int max_summed = a.quick ? std::min(a.max_n_summed, 8) : a.max_n_summed;
   std::vector<std::string> comments = {
       "The estimator's modes on the depth-camera setting: depth noise (range sigma = 0.008 d^2, bearing 0.005 rad),",
@@ -667,8 +684,7 @@ void modes_table(const Args& a, Summary& sum) {
 }
 
 void robust_table(const Args& a, Summary& sum) {
-  std::vector<int> sizes = a.quick ? std::vector<int>{4, 8} : std::vector<int>{4, 8, 16};
-  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [&](int n) { return n > a.max_n; }), sizes.end());
+  const std::vector<int> sizes = sizes_up_to(a.quick ? std::vector<int>{4, 8} : std::vector<int>{4, 8, 16}, a.max_n);
   Output out(a.out_dir, "estimator_robust.csv",
              {"Robustness: auto mode, depth noise, range 6 m, false_positives 0.3 per drone per round, miss_rate 0.1,",
               "3 random obstacles (0.4 m cylinders), room max(6, 2.5 sqrt N) m, K_max = N+3, rounds added until certified.",
@@ -681,14 +697,7 @@ void robust_table(const Args& a, Summary& sum) {
   for (int n : sizes) {
     const int s_count = scenarios_for(a, n);
     std::vector<fact::SimOptions> sims;
-    for (int s = 0; s < s_count; ++s) {
-      fact::SimOptions o = depth_sim(n, n + 3, scenario_seed(a, 5, n, s));
-      o.room = std::max(6.0, room_for(n));
-      o.false_positives = 0.3;
-      o.miss_rate = 0.1;
-      o.obstacles = 3;
-      sims.push_back(o);
-    }
+    for (int s = 0; s < s_count; ++s) sims.push_back(robust_sim(n, n + 3, scenario_seed(a, 5, n, s)));
     const RoundsStats st = rounds_to_certified(a, fact::Mode::automatic, sims, "robust", depth_sensor_model());
     const double sc = std::max(1, st.scenarios);
     out.row(n, st.scenarios, num(st.certified / sc), num(mean(st.rounds)), st.wrong, num(mean(st.yaw_err)),
@@ -710,8 +719,7 @@ void robust_table(const Args& a, Summary& sum) {
 // default model assumes), with false positives, misses and obstacles; judged against the frames
 // of the latest round used.
 void field_model_table(const Args& a, Summary& sum) {
-  std::vector<int> sizes = a.quick ? std::vector<int>{2, 4} : std::vector<int>{2, 4, 8, 16};
-  sizes.erase(std::remove_if(sizes.begin(), sizes.end(), [&](int n) { return n > a.max_n; }), sizes.end());
+  const std::vector<int> sizes = sizes_up_to(a.quick ? std::vector<int>{2, 4} : std::vector<int>{2, 4, 8, 16}, a.max_n);
   Output out(a.out_dir, "estimator_field_model.csv",
              {"auto mode with the default NoiseModel (floor 0.03 m, odometry 0.02 m / 0.01 rad within a round, walk",
               "0.03 m / 0.006 rad per sqrt(round)). drift 0: the depth scenarios of estimator_modes.csv; drift 1: VIO",
@@ -725,12 +733,9 @@ void field_model_table(const Args& a, Summary& sum) {
     for (int drift : {0, 1}) {
       std::vector<fact::SimOptions> sims;
       for (int s = 0; s < scenarios_for(a, n); ++s) {
-        fact::SimOptions o = depth_sim(n, n + 3, scenario_seed(a, drift ? 9 : 4, n, s));
+        fact::SimOptions o = drift ? robust_sim(n, n + 3, scenario_seed(a, 9, n, s))
+                                   : depth_sim(n, n + 3, scenario_seed(a, 4, n, s));
         if (drift) {
-          o.room = std::max(6.0, room_for(n));
-          o.false_positives = 0.3;
-          o.miss_rate = 0.1;
-          o.obstacles = 3;
           o.drift_yaw = 0.006;
           o.drift_position = 0.03;
         }
