@@ -80,22 +80,29 @@ std::string validate_rounds(const Rounds& rounds) {
   return "";
 }
 
-Rounds first_rounds(const Rounds& rounds, int count) {
+namespace {
+
+// Rounds [begin, begin + count) of `rounds`, with the swarm's ids.
+Rounds slice(const Rounds& rounds, size_t begin, size_t count) {
   Rounds out;
   out.drones = rounds.drones;
-  const size_t n = (count <= 0 || static_cast<size_t>(count) > rounds.rounds.size()) ? rounds.rounds.size()
-                                                                                    : static_cast<size_t>(count);
-  out.rounds.assign(rounds.rounds.begin(), rounds.rounds.begin() + n);
+  out.rounds.assign(rounds.rounds.begin() + begin, rounds.rounds.begin() + begin + count);
   return out;
 }
 
+// How many of the rounds a request for `count` takes: all of them when count <= 0 or too large.
+size_t taken(const Rounds& rounds, int count) {
+  const size_t all = rounds.rounds.size();
+  return (count <= 0 || static_cast<size_t>(count) > all) ? all : static_cast<size_t>(count);
+}
+
+}  // namespace
+
+Rounds first_rounds(const Rounds& rounds, int count) { return slice(rounds, 0, taken(rounds, count)); }
+
 Rounds last_rounds(const Rounds& rounds, int count) {
-  Rounds out;
-  out.drones = rounds.drones;
-  const size_t n = (count <= 0 || static_cast<size_t>(count) > rounds.rounds.size()) ? rounds.rounds.size()
-                                                                                    : static_cast<size_t>(count);
-  out.rounds.assign(rounds.rounds.end() - n, rounds.rounds.end());
-  return out;
+  const size_t n = taken(rounds, count);
+  return slice(rounds, rounds.rounds.size() - n, n);
 }
 
 }  // namespace fact
