@@ -30,6 +30,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -160,20 +161,23 @@ int latest_round_window(const RunLog& run, int64_t t, int64_t* t0, int64_t* t1) 
   *t0 = first_airborne(run);
   *t1 = t;
   if (!run.rounds) return -1;
-  std::map<int, std::pair<int64_t, int64_t>> closes;  // round → first and last close time
-  std::map<int, int> count;                            // round → packets
+  struct Closes {
+    int64_t first = INT64_MAX, last = INT64_MIN;  // the drones' first and last close time (sim µs)
+    int packets = 0;
+  };
+  std::map<int, Closes> closes;  // by round
   for (const fact::round_packet_t& p : run.rounds->packets) {
-    auto [it, added] = closes.try_emplace(p.round, p.utime, p.utime);
-    it->second.first = std::min(it->second.first, p.utime);
-    it->second.second = std::max(it->second.second, p.utime);
-    ++count[p.round];
+    Closes& c = closes[p.round];
+    c.first = std::min(c.first, p.utime);
+    c.last = std::max(c.last, p.utime);
+    ++c.packets;
   }
   int latest = -1;
   for (const auto& [round, c] : closes)
-    if (count[round] == run.rounds->num_drones && c.second <= t) latest = round;
+    if (c.packets == run.rounds->num_drones && c.last <= t) latest = round;
   if (latest < 0) return -1;
   if (latest > 0) *t0 = std::max(*t0, closes[latest - 1].first);
-  *t1 = closes[latest].second;
+  *t1 = closes[latest].last;
   return latest;
 }
 
