@@ -14,6 +14,8 @@
 //    equally well).
 // 3. Assembly. Edges join clusters strongest first; an edge that would put two drones closer than
 //    min_separation in some round is dropped (one of its detections belongs to another drone).
+//    A drone whose every pair is too weak joins a cluster when one pose of it explains its points
+//    against all the members at once, with the pair's thresholds (join_weak).
 // 4. Rotations by certified synchronisation (the SO(2) connection-Laplacian SDP, d = 2, which has
 //    the complex form's structure) over the edges connected to the reference, weighted by each
 //    edge's yaw information; edges that disagree with the synchronised yaws are dropped.
@@ -80,6 +82,7 @@ struct Hypothesis {
   RelativePose pose;
   double yaw_sigma = 0;                   // rad, σ of pose.yaw
   std::vector<Link> links;                // verified matches, all rounds: which points each joins
+  std::vector<double> link_scores;        // log-likelihood ratio of each match, as links
   double score = 0;                       // Σ log-likelihood ratio of the matches (inlier vs clutter)
   int evidence() const { return static_cast<int>(links.size()); }
 };
@@ -90,6 +93,7 @@ template <class Spread>
 void verify(const Problem& p, const PointSets& points, int i, int j, const RelativePose& pose, Spread spread,
             Hypothesis* h) {
   h->links.clear();
+  h->link_scores.clear();
   h->score = 0;
   const double gate2 = p.noise.gate * p.noise.gate;
   for (int k = 0; k < p.rounds(); ++k) {
@@ -148,6 +152,7 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
       if (evidence <= 0) continue;
       h->score += evidence;
       h->links.push_back({k, A[a].det, B[b].det});
+      h->link_scores.push_back(evidence);
     }
   }
 }
@@ -165,8 +170,9 @@ std::vector<Correspondence> correspondences(const PointSets& points, int i, int 
 }
 
 // Weighted Procrustes for a yaw and a 3-D translation: min Σ w ‖x_i − R(θ) x_j − t‖².
-// Also returns σ of θ from its information Σ w |q_xy|² (q: x_j about its weighted centroid).
-RelativePose procrustes(const std::vector<Correspondence>& cs, double* yaw_sigma) {
+// Also returns σ of θ from its information Σ w |q_xy|² (q: x_j about its weighted centroid) and,
+// if asked, that centroid mapped into f_i (the point the yaw error turns about).
+RelativePose procrustes(const std::vector<Correspondence>& cs, double* yaw_sigma, Eigen::Vector3d* pivot = nullptr) {
   Eigen::Vector3d mi = Eigen::Vector3d::Zero(), mj = Eigen::Vector3d::Zero();
   double wsum = 0;
   for (const Correspondence& c : cs) {
@@ -186,6 +192,7 @@ RelativePose procrustes(const std::vector<Correspondence>& cs, double* yaw_sigma
   pose.yaw = std::atan2(cross, dot);
   pose.t = mi - yaw_rotation(pose.yaw) * mj;
   *yaw_sigma = info > 0 ? 1.0 / std::sqrt(info) : INFINITY;
+  if (pivot) *pivot = mi;
   return pose;
 }
 
@@ -261,6 +268,7 @@ struct Edge {
   int evidence = 0, rival = 0;  // matches of the best and of the best distinct hypothesis
   double rival_score = 0;       // score of the best distinct hypothesis (0: none)
   Hypothesis best;
+  std::vector<Hypothesis> hypotheses;  // every verified hypothesis of the pair, best first
   bool dropped = false;         // rejected by the global consistency checks
 };
 
@@ -274,6 +282,7 @@ Edge judge_pair(const Problem& p, const PointSets& points, int i, int j) {
   });
   e.best = hs.front();
   e.evidence = e.best.evidence();
+  e.hypotheses = hs;
   for (const Hypothesis& h : hs)
     if (distinct(e.best, h)) {
       e.rival = h.evidence();
@@ -317,15 +326,16 @@ std::pair<int, int> overlap(const Problem& p, const std::vector<Placement>& plac
   return {-1, -1};
 }
 
-// Joins clusters along accepted edges, strongest first. An edge that would put two drones in
-// one place in some round is dropped: one of its detections belongs to another drone.
-void assemble(const Problem& p, std::vector<Edge>* edges) {
+// Joins clusters along accepted edges, strongest first, and returns where each drone went. An
+// edge that would put two drones in one place in some round is dropped: one of its detections
+// belongs to another drone.
+std::vector<Placement> assemble(const Problem& p, std::vector<Edge>* edges) {
   std::vector<Placement> place(p.drones());
   std::vector<std::vector<int>> members(p.drones());
   for (int i = 0; i < p.drones(); ++i) place[i].root = i, members[i] = {i};
   std::vector<Edge*> order;
   for (Edge& e : *edges)
-    if (e.kind == EdgeKind::accepted) order.push_back(&e);
+    if (e.kind == EdgeKind::accepted && !e.dropped) order.push_back(&e);
   std::sort(order.begin(), order.end(), [](const Edge* x, const Edge* y) { return x->best.score > y->best.score; });
   for (Edge* e : order) {
     const int ri = place[e->i].root, rj = place[e->j].root;
@@ -342,6 +352,161 @@ void assemble(const Problem& p, std::vector<Edge>* edges) {
     }
     members[rj].clear();
   }
+  return place;
+}
+
+// --- a drone whose pairs are each too weak joins a cluster as a whole -------------------------
+//
+// A drone that several members of the cluster saw, but each too few times, can still join it:
+// one pose of the drone must explain its points against every member at once, so the evidence
+// of its pairs adds up. Each point of the drone counts once (its best match), so a detection of
+// it that several members' points explain is not counted twice. The thresholds are the pair's:
+// kMinEvidence matches, a score of kMinScore and a margin of kMinScoreMargin over every distinct
+// pose of the drone that any of its pairs with the cluster proposed.
+
+// A counted match of the joining drone: which member (index into the member list) and which points.
+struct MemberLink {
+  int member;
+  Link link;
+  double score;
+  bool operator==(const MemberLink& o) const { return member == o.member && link == o.link; }
+};
+
+// One pose of drone j in the cluster root's frame, verified against every member.
+struct ClusterFit {
+  RelativePose pose;               // f_j in the root's frame
+  double yaw_sigma = 0;            // rad, σ of pose.yaw
+  std::vector<MemberLink> matches; // j's matched points, each once (its best match)
+  double score = 0;                // Σ of their scores
+  int evidence() const { return static_cast<int>(matches.size()); }
+};
+
+// j's points matched against every member under pose (two passes: as given, then refined by
+// Procrustes over the counted matches); pivot (root frame) is where the yaw error turns about.
+ClusterFit fit_cluster(const Problem& p, const PointSets& points, const std::vector<Placement>& place,
+                       const std::vector<int>& members, int j, RelativePose pose, double yaw_sigma,
+                       Eigen::Vector3d pivot) {
+  ClusterFit f;
+  for (int pass = 0; pass < 2; ++pass) {
+    f = ClusterFit{pose, yaw_sigma, {}, 0};
+    for (size_t n = 0; n < members.size(); ++n) {
+      const RelativePose to_m = inverse(place[members[n]].pose);
+      const Eigen::Vector3d anchor = to_m.map(pivot);
+      Hypothesis h;
+      verify(p, points, members[n], j, compose(to_m, pose),
+             [&](const Eigen::Vector3d& x) { return yaw_sigma * (x - anchor).norm(); }, &h);
+      for (size_t l = 0; l < h.links.size(); ++l) {
+        const Link& link = h.links[l];
+        auto same_point = [&](const MemberLink& m) {
+          return m.link.round == link.round && m.link.det_j == link.det_j;
+        };
+        auto it = std::find_if(f.matches.begin(), f.matches.end(), same_point);
+        if (it == f.matches.end()) f.matches.push_back({static_cast<int>(n), link, h.link_scores[l]});
+        else if (h.link_scores[l] > it->score) *it = {static_cast<int>(n), link, h.link_scores[l]};
+      }
+    }
+    for (const MemberLink& m : f.matches) f.score += m.score;
+    if (f.evidence() < kMinEvidence || pass == 1) break;
+    std::vector<Correspondence> cs;
+    for (const MemberLink& m : f.matches) {
+      const Point& a = points[m.link.round][members[m.member]][m.link.det_i + 1];
+      const Point& b = points[m.link.round][j][m.link.det_j + 1];
+      cs.push_back({0, j, place[members[m.member]].pose.map(a.x), b.x, std::hypot(a.sigma, b.sigma), a.cov, b.cov});
+    }
+    pose = procrustes(cs, &yaw_sigma, &pivot);
+  }
+  return f;
+}
+
+// Two fits are distinct poses when they share under half of the smaller one's matches.
+bool distinct(const ClusterFit& x, const ClusterFit& y) {
+  int shared = 0;
+  for (const MemberLink& m : y.matches) shared += std::find(x.matches.begin(), x.matches.end(), m) != x.matches.end();
+  return 2 * shared < std::min(x.evidence(), y.evidence());
+}
+
+// Every pose of j that a pair of j with a member proposed, fitted against the whole cluster.
+std::vector<ClusterFit> cluster_fits(const Problem& p, const PointSets& points, const std::vector<Placement>& place,
+                                     const std::vector<int>& members, const std::vector<Edge>& edges, int j) {
+  std::vector<ClusterFit> fits;
+  for (const Edge& e : edges) {
+    const int m = e.i == j ? e.j : e.j == j ? e.i : -1;
+    if (m < 0 || !std::count(members.begin(), members.end(), m)) continue;
+    for (const Hypothesis& h : e.hypotheses) {
+      const RelativePose j_in_m = e.i == m ? h.pose : inverse(h.pose);  // f_j in f_m
+      const RelativePose j_in_root = compose(place[m].pose, j_in_m);
+      // The yaw error turns about the defining pair: midway between the two drones.
+      const Eigen::Vector3d pivot = 0.5 * (place[m].pose.map(p.views[h.round][m].position) +
+                                           j_in_root.map(p.views[h.round][j].position));
+      fits.push_back(fit_cluster(p, points, place, members, j, j_in_root, h.yaw_sigma, pivot));
+    }
+  }
+  std::sort(fits.begin(), fits.end(), [](const ClusterFit& x, const ClusterFit& y) { return x.score > y.score; });
+  return fits;
+}
+
+// The fit as accepted edges from j to every member it matched. The members share the fit's yaw
+// information: each edge's σ is the fit's times √(edges), so together they weigh as the one fit.
+void accept_fit(const std::vector<Placement>& place, const std::vector<int>& members, int j, const ClusterFit& fit,
+                std::vector<Edge>* edges) {
+  std::vector<std::vector<MemberLink>> by_member(members.size());
+  for (const MemberLink& m : fit.matches) by_member[m.member].push_back(m);
+  const int used = static_cast<int>(std::count_if(by_member.begin(), by_member.end(),
+                                                  [](const std::vector<MemberLink>& v) { return !v.empty(); }));
+  for (size_t n = 0; n < members.size(); ++n) {
+    if (by_member[n].empty()) continue;
+    const int m = members[n];
+    auto e = std::find_if(edges->begin(), edges->end(), [&](const Edge& x) {
+      return (x.i == m && x.j == j) || (x.i == j && x.j == m);
+    });
+    if (e == edges->end()) continue;  // every pair has an edge; kept for safety
+    Hypothesis h;
+    h.pose = compose(inverse(place[m].pose), fit.pose);
+    h.yaw_sigma = fit.yaw_sigma * std::sqrt(static_cast<double>(used));
+    for (const MemberLink& l : by_member[n]) h.links.push_back(l.link), h.link_scores.push_back(l.score), h.score += l.score;
+    e->i = m, e->j = j;
+    e->kind = EdgeKind::accepted;
+    e->evidence = h.evidence();
+    e->best = std::move(h);
+    e->dropped = false;
+  }
+}
+
+// Joins to a cluster of two or more drones (the reference's first) the first drone alone in its
+// own cluster that one pose fits against the whole cluster. Returns true when one joined:
+// assemble again.
+bool join_weak(const Problem& p, const PointSets& points, const std::vector<Placement>& place,
+               std::vector<Edge>* edges) {
+  const auto cluster = [&](int root) {
+    std::vector<int> members;
+    for (int i = 0; i < p.drones(); ++i)
+      if (place[i].root == root) members.push_back(i);
+    return members;
+  };
+  std::vector<int> roots{place[p.reference].root};
+  for (int i = 0; i < p.drones(); ++i)
+    if (place[i].root == i && i != roots.front()) roots.push_back(i);
+  for (int root : roots) {
+    const std::vector<int> members = cluster(root);
+    if (members.size() < 2) continue;  // with one member the pair's own test is the cluster's
+    for (int j = 0; j < p.drones(); ++j) {
+      if (place[j].root != j || cluster(j).size() > 1) continue;
+      const std::vector<ClusterFit> fits = cluster_fits(p, points, place, members, *edges, j);
+      if (fits.empty()) continue;
+      const ClusterFit& best = fits.front();
+      double rival = 0;
+      for (const ClusterFit& f : fits)
+        if (distinct(best, f)) {
+          rival = f.score;
+          break;
+        }
+      if (best.evidence() < kMinEvidence || best.score < kMinScore || best.score - rival < kMinScoreMargin) continue;
+      if (overlap(p, place, members, {j}, best.pose).first >= 0) continue;
+      accept_fit(place, members, j, best, edges);
+      return true;
+    }
+  }
+  return false;
 }
 
 // Drones reachable from the reference over accepted, not dropped edges.
@@ -471,7 +636,9 @@ bool translate(const Problem& p, const PointSets& points, std::vector<Edge>* edg
 
 Solution solve_graph(const Problem& p, const PointSets& points, std::vector<Edge>* edges, const sdp::Options& o) {
   Solution s;
-  assemble(p, edges);
+  // Each join takes one drone out of a cluster of its own: at most N − 1 of them.
+  std::vector<Placement> place = assemble(p, edges);
+  for (int joins = 1; joins < p.drones() && join_weak(p, points, place, edges); ++joins) place = assemble(p, edges);
   for (;;) {
     s.members = component(p.drones(), p.reference, *edges);
     if (s.members.size() < 2) return s;
