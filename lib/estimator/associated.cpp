@@ -553,10 +553,11 @@ std::string id_list(const Problem& p, const std::vector<int>& indices) {
 
 // Why the drones outside the component could not be joined, from the pairs that touch them.
 std::string unresolved_reason(const Problem& p, const std::vector<int>& outside, const std::vector<Edge>& edges) {
-  int weak = 0, ambiguous = 0, dropped = 0;
+  int unseen = 0, weak = 0, ambiguous = 0, dropped = 0;
   for (const Edge& e : edges) {
     const bool touches = std::count(outside.begin(), outside.end(), e.i) || std::count(outside.begin(), outside.end(), e.j);
     if (!touches) continue;
+    unseen += e.kind == EdgeKind::none;
     weak += e.kind == EdgeKind::weak;
     ambiguous += e.kind == EdgeKind::ambiguous;
     dropped += e.kind == EdgeKind::accepted && e.dropped;
@@ -566,7 +567,9 @@ std::string unresolved_reason(const Problem& p, const std::vector<int>& outside,
     << " pair(s) ambiguous (several poses explain the detections equally well, e.g. a symmetric formation), "
     << weak << " pair(s) with too little evidence (< " << kMinEvidence << " matched points or log-likelihood ratio < "
     << kMinScore << "; more rounds needed), "
-    << dropped << " pair(s) dropped as inconsistent";
+    << dropped << " pair(s) dropped as inconsistent, " << unseen
+    << " pair(s) never seen as a mutual pair (the two did not detect each other in one round with matching "
+       "ranges and heights)";
   return s.str();
 }
 
