@@ -72,8 +72,10 @@ std::vector<Point> points_of(const DroneView& v, double odometry_sigma) {
 }
 
 // Which two points a match joins: round k, point of i, point of j (−1 = the drone's own position).
+// Its log-likelihood ratio (inlier against clutter) rides along; equality is the points only.
 struct Link {
   int round, det_i, det_j;
+  double score = 0;
   bool operator==(const Link& o) const { return round == o.round && det_i == o.det_i && det_j == o.det_j; }
 };
 
@@ -82,7 +84,6 @@ struct Hypothesis {
   RelativePose pose;
   double yaw_sigma = 0;                   // rad, σ of pose.yaw
   std::vector<Link> links;                // verified matches, all rounds: which points each joins
-  std::vector<double> link_scores;        // log-likelihood ratio of each match, as links
   double score = 0;                       // Σ log-likelihood ratio of the matches (inlier vs clutter)
   int evidence() const { return static_cast<int>(links.size()); }
 };
@@ -93,7 +94,6 @@ template <class Spread>
 void verify(const Problem& p, const PointSets& points, int i, int j, const RelativePose& pose, Spread spread,
             Hypothesis* h) {
   h->links.clear();
-  h->link_scores.clear();
   h->score = 0;
   const double gate2 = p.noise.gate * p.noise.gate;
   for (int k = 0; k < p.rounds(); ++k) {
@@ -151,8 +151,7 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
                               0.5 * std::log(det_s[a * nb + b]) - 0.5 * cost_b[a];
       if (evidence <= 0) continue;
       h->score += evidence;
-      h->links.push_back({k, A[a].det, B[b].det});
-      h->link_scores.push_back(evidence);
+      h->links.push_back({k, A[a].det, B[b].det, evidence});
     }
   }
 }
@@ -268,7 +267,7 @@ struct Edge {
   int evidence = 0, rival = 0;  // matches of the best and of the best distinct hypothesis
   double rival_score = 0;       // score of the best distinct hypothesis (0: none)
   Hypothesis best;
-  std::vector<Hypothesis> hypotheses;  // every verified hypothesis of the pair, best first
+  std::vector<Hypothesis> hypotheses;  // every verified hypothesis of a weak or ambiguous pair, best first
   bool dropped = false;         // rejected by the global consistency checks
 };
 
@@ -282,7 +281,6 @@ Edge judge_pair(const Problem& p, const PointSets& points, int i, int j) {
   });
   e.best = hs.front();
   e.evidence = e.best.evidence();
-  e.hypotheses = hs;
   for (const Hypothesis& h : hs)
     if (distinct(e.best, h)) {
       e.rival = h.evidence();
@@ -292,6 +290,7 @@ Edge judge_pair(const Problem& p, const PointSets& points, int i, int j) {
   if (e.evidence < kMinEvidence || e.best.score < kMinScore) e.kind = EdgeKind::weak;
   else if (e.best.score - e.rival_score < kMinScoreMargin) e.kind = EdgeKind::ambiguous;
   else e.kind = EdgeKind::accepted;
+  if (e.kind != EdgeKind::accepted) e.hypotheses = std::move(hs);  // what join_weak may still use
   return e;
 }
 
@@ -368,7 +367,6 @@ std::vector<Placement> assemble(const Problem& p, std::vector<Edge>* edges) {
 struct MemberLink {
   int member;
   Link link;
-  double score;
   bool operator==(const MemberLink& o) const { return member == o.member && link == o.link; }
 };
 
@@ -395,17 +393,16 @@ ClusterFit fit_cluster(const Problem& p, const PointSets& points, const std::vec
       Hypothesis h;
       verify(p, points, members[n], j, compose(to_m, pose),
              [&](const Eigen::Vector3d& x) { return yaw_sigma * (x - anchor).norm(); }, &h);
-      for (size_t l = 0; l < h.links.size(); ++l) {
-        const Link& link = h.links[l];
+      for (const Link& link : h.links) {
         auto same_point = [&](const MemberLink& m) {
           return m.link.round == link.round && m.link.det_j == link.det_j;
         };
         auto it = std::find_if(f.matches.begin(), f.matches.end(), same_point);
-        if (it == f.matches.end()) f.matches.push_back({static_cast<int>(n), link, h.link_scores[l]});
-        else if (h.link_scores[l] > it->score) *it = {static_cast<int>(n), link, h.link_scores[l]};
+        if (it == f.matches.end()) f.matches.push_back({static_cast<int>(n), link});
+        else if (link.score > it->link.score) *it = {static_cast<int>(n), link};
       }
     }
-    for (const MemberLink& m : f.matches) f.score += m.score;
+    for (const MemberLink& m : f.matches) f.score += m.link.score;
     if (f.evidence() < kMinEvidence || pass == 1) break;
     std::vector<Correspondence> cs;
     for (const MemberLink& m : f.matches) {
@@ -463,7 +460,7 @@ void accept_fit(const std::vector<Placement>& place, const std::vector<int>& mem
     Hypothesis h;
     h.pose = compose(inverse(place[m].pose), fit.pose);
     h.yaw_sigma = fit.yaw_sigma * std::sqrt(static_cast<double>(used));
-    for (const MemberLink& l : by_member[n]) h.links.push_back(l.link), h.link_scores.push_back(l.score), h.score += l.score;
+    for (const MemberLink& l : by_member[n]) h.links.push_back(l.link), h.score += l.link.score;
     e->i = m, e->j = j;
     e->kind = EdgeKind::accepted;
     e->evidence = h.evidence();
