@@ -203,6 +203,40 @@ TEST(Estimator, NeverCertifiesWrongWithFalsePositivesMissesAndObstacles) {
   EXPECT_GE(certified, 6);  // most of them certify; the rate itself is a benchmark figure
 }
 
+// Heavy clutter: 3 false positives per drone per round, 20 % misses, 3 obstacles, VIO drift, and
+// rounds added one at a time until the first certified result, as the planner does. 200
+// sessions at N = 2 and 100 at N = 3, 4, 6; none may certify a wrong pose. The pair evidence
+// threshold (a log-likelihood ratio of 20) has a margin here: at 10, N = 2 session 2 certifies a
+// pose 0.25 rad and 0.74 m off.
+TEST(Estimator, HeavyClutterNeverCertifiesWrongAsRoundsAccumulate) {
+  int certified = 0, sessions = 0;
+  for (int n : {2, 3, 4, 6}) {
+    const int count = n == 2 ? 200 : 100;
+    for (int session = 0; session < count; ++session, ++sessions) {
+      SimOptions o = swarm(n, n + 3, 777000 + 1000 * n + session);
+      o.room = std::max(6.0, 2.5 * std::sqrt(static_cast<double>(n)));
+      o.noise = NoiseKind::depth;
+      o.range_limit = 6;
+      o.false_positives = 3.0;
+      o.miss_rate = 0.2;
+      o.obstacles = 3;
+      o.drift_yaw = 0.006;
+      o.drift_position = 0.03;
+      const Scenario s = generate_scenario(o);
+      for (int k = 1; k <= o.rounds; ++k) {
+        const Estimate e = run(s, Mode::automatic, k, NoiseModel{});
+        if (!e.certified()) continue;
+        ++certified;
+        const Errors err = errors_against_truth(e, s.truth, k - 1);
+        EXPECT_LT(err.yaw, 0.1) << "N = " << n << ", session " << session << ", " << k << " rounds";
+        EXPECT_LT(err.position, 0.3) << "N = " << n << ", session " << session << ", " << k << " rounds";
+        break;
+      }
+    }
+  }
+  EXPECT_GE(certified, sessions / 2);  // most certify; the rate itself is a benchmark figure
+}
+
 // Long sessions with VIO drift (the default model's walk per round): every estimate from the
 // first K rounds, K = 1 … 10, that certifies is right about the frames of its latest round,
 // and the result tracks them rather than the frames of the first round.
