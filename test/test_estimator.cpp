@@ -47,6 +47,26 @@ SimOptions swarm(int drones, int rounds, std::uint64_t seed) {
   return o;
 }
 
+// The swarm as a depth camera sees it in a cluttered room: depth noise, 6 m range, obstacles,
+// false positives and misses (per drone per round); no VIO drift unless with_drift adds it.
+SimOptions field_swarm(int drones, int rounds, std::uint64_t seed, int obstacles, double false_positives,
+                       double miss_rate) {
+  SimOptions o = swarm(drones, rounds, seed);
+  o.noise = NoiseKind::depth;
+  o.range_limit = 6;
+  o.obstacles = obstacles;
+  o.false_positives = false_positives;
+  o.miss_rate = miss_rate;
+  return o;
+}
+
+// VIO drift at the default noise model's random walk per round.
+SimOptions with_drift(SimOptions o) {
+  o.drift_yaw = 0.006;
+  o.drift_position = 0.03;
+  return o;
+}
+
 // The sensor model a user states for exact data: millimetre-level noise and no odometry error.
 NoiseModel exact_sensor() {
   NoiseModel n;
@@ -185,12 +205,7 @@ TEST(Estimator, DroneOutOfRangeOfEveryoneIsNamedUnresolved) {
 TEST(Estimator, NeverCertifiesWrongWithFalsePositivesMissesAndObstacles) {
   int certified = 0;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
-    SimOptions o = swarm(6, 4, 100 + seed);
-    o.noise = NoiseKind::depth;
-    o.range_limit = 6;
-    o.false_positives = 0.3;
-    o.miss_rate = 0.1;
-    o.obstacles = 3;
+    SimOptions o = field_swarm(6, 4, 100 + seed, 3, 0.3, 0.1);
     o.room = 7;
     const Scenario s = generate_scenario(o);
     const Estimate e = run(s, Mode::automatic, 0, NoiseModel{});
@@ -213,15 +228,8 @@ TEST(Estimator, HeavyClutterNeverCertifiesWrongAsRoundsAccumulate) {
   for (int n : {2, 3, 4, 6}) {
     const int count = n == 2 ? 200 : 100;
     for (int session = 0; session < count; ++session, ++sessions) {
-      SimOptions o = swarm(n, n + 3, 777000 + 1000 * n + session);
+      SimOptions o = with_drift(field_swarm(n, n + 3, 777000 + 1000 * n + session, 3, 3.0, 0.2));
       o.room = std::max(6.0, 2.5 * std::sqrt(static_cast<double>(n)));
-      o.noise = NoiseKind::depth;
-      o.range_limit = 6;
-      o.false_positives = 3.0;
-      o.miss_rate = 0.2;
-      o.obstacles = 3;
-      o.drift_yaw = 0.006;
-      o.drift_position = 0.03;
       const Scenario s = generate_scenario(o);
       for (int k = 1; k <= o.rounds; ++k) {
         const Estimate e = run(s, Mode::automatic, k, NoiseModel{});
@@ -244,13 +252,8 @@ TEST(Estimator, DriftOverLongSessionsNeverCertifiesOldFrames) {
   int certified = 0, late = 0;
   double worst_yaw = 0, worst_position = 0;
   for (std::uint64_t seed = 1; seed <= 16; ++seed) {
-    SimOptions o = swarm(4, 10, 300 + seed);
-    o.noise = NoiseKind::depth;
-    o.range_limit = 6;
-    o.obstacles = 2;
-    o.miss_rate = 0.3;  // sparse sightings: sessions run long
-    o.drift_yaw = 0.006;
-    o.drift_position = 0.03;
+    // 30 % misses: sparse sightings, so sessions run long
+    const SimOptions o = with_drift(field_swarm(4, 10, 300 + seed, 2, 0.0, 0.3));
     const Scenario s = generate_scenario(o);
     for (int k = 1; k <= o.rounds; ++k) {
       const Estimate e = run(s, Mode::automatic, k, NoiseModel{});
