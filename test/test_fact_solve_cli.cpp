@@ -100,14 +100,16 @@ const std::string kValidRounds = R"({"format": "fact-rounds-v1", "drones": [2, 7
           "observations": [{"odom_position": [0, 0, 1], "odom_yaw": 0.5, "vector": [1, 2, 0.5]}]},
     "7": {"position": [3, 1, 1.5], "yaw": -1, "observations": []}}}]})";
 
-// The scenario the agreement tests solve: 5 drones, 3 rounds, depth-camera noise, seed 7.
+// The scenario the agreement tests solve: 5 drones, 3 rounds, depth-camera noise, seed 8. (Seed 7
+// until 2026-11-25: since the pair threshold went from 30 to 20, its drone 4 fails the consistency
+// check by 0.0008 m after 3 rounds, which is a refusal, not a wrong answer.)
 const fact::Scenario& scenario() {
   static const fact::Scenario s = [] {
     fact::SimOptions o;
     o.drones = 5;
     o.rounds = 3;
     o.noise = fact::NoiseKind::depth;
-    o.seed = 7;
+    o.seed = 8;
     return fact::generate_scenario(o);
   }();
   return s;

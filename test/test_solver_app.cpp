@@ -289,14 +289,15 @@ class SolverApp : public ::testing::Test {
   std::vector<std::unique_ptr<Process>> processes_;
 };
 
-// 5 drones, 3 rounds, depth-camera noise: a scenario the estimator certifies.
+// 5 drones, 3 rounds, depth-camera noise: a scenario the estimator certifies (seed 8; seed 7 no
+// longer does since the pair threshold went from 30 to 20, see test_fact_solve_cli.cpp).
 const fact::Rounds& scenario_rounds() {
   static const fact::Rounds r = [] {
     fact::SimOptions o;
     o.drones = 5;
     o.rounds = 3;
     o.noise = fact::NoiseKind::depth;
-    o.seed = 7;
+    o.seed = 8;
     return fact::generate_scenario(o).rounds;
   }();
   return r;
