@@ -17,9 +17,14 @@ Eigen::MatrixXd lambda_from_factor(const Eigen::MatrixXd& C, const Eigen::Matrix
   return lambda;
 }
 
-Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d) {
-  Eigen::MatrixXd S = C;
+void certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& S) {
+  S = C;
   for (Eigen::Index i = 0; i < C.rows(); i += d) S.block(i, i, d, d) -= lambda.middleRows(i, d);
+}
+
+Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d) {
+  Eigen::MatrixXd S;
+  certificate_matrix(C, lambda, d, S);
   return S;
 }
 

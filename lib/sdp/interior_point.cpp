@@ -41,12 +41,6 @@ void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, 
   }
 }
 
-// Z = C − blkdiag(Λ), n × n.
-void dual_slack(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& Z) {
-  Z = C;
-  for (Eigen::Index i = 0; i < C.rows(); i += d) Z.block(i, i, d, d) -= lambda.middleRows(i, d);
-}
-
 // Schur complement M_pq = tr(A_p X A_q W), m × m, with W = Z⁻¹.
 // For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα.
 void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
@@ -144,7 +138,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   Eigen::MatrixXd lambda(n, d);                          // Aᵀ(y) as stacked d × d blocks, n × d
   lambda_from_y(y, entries, d, lambda);
   Eigen::MatrixXd Z(n, n);                               // dual slack C − Aᵀ(y), n × n
-  dual_slack(C, lambda, d, Z);
+  certificate_matrix(C, lambda, d, Z);
   const double tau = 0.95;
 
   // The iterate with the smallest gap so far: once rounding limits the last digits the gap
@@ -234,7 +228,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     X += ap * ws.dx;
     y += ad * ws.dy;
     lambda_from_y(y, entries, d, lambda);
-    dual_slack(C, lambda, d, Z);
+    certificate_matrix(C, lambda, d, Z);
   }
   X = best_X;
   lambda_from_y(best_y, entries, d, lambda);

@@ -19,8 +19,9 @@ struct Certificate {
 // Λ from a primal factor Y (n × r) whose d×d diagonal blocks of Y Yᵀ are I.
 Eigen::MatrixXd lambda_from_factor(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d);
 
-// S = C − blkdiag(Λ), n × n.
+// S = C − blkdiag(Λ), n × n: returned, or written into S (no allocation when S is already n × n).
 Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d);
+void certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& S);
 
 // Eigen-analysis of S for a given Λ. With want_vector, also the eigenvector of λ_min.
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector);

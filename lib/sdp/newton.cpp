@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "internal.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 namespace {
@@ -63,17 +64,16 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
 
 // Λ = SymBlockDiag(C Y Yᵀ) from ws.CY, then S = C − blkdiag(Λ) and S Y = C Y − blkdiag(Λ) Y.
 void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, NewtonWorkspace& ws) {
-  ws.S = C;
   for (Eigen::Index i = 0; i < C.rows(); i += d) {
     const Eigen::MatrixXd::ConstRowsBlockXpr Yi = Y.middleRows(i, d);
     auto lambda = ws.lambda.middleRows(i, d);
     lambda.noalias() = ws.CY.middleRows(i, d) * Yi.transpose();
     for (int a = 0; a < d; ++a)
       for (int b = a + 1; b < d; ++b) lambda(a, b) = lambda(b, a) = 0.5 * (lambda(a, b) + lambda(b, a));
-    ws.S.block(i, i, d, d) -= lambda;
     ws.SY.middleRows(i, d) = ws.CY.middleRows(i, d);
     ws.SY.middleRows(i, d).noalias() -= lambda * Yi;
   }
+  certificate_matrix(C, ws.lambda, d, ws.S);
 }
 
 // H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the D × t matrices Bc_i (column c of
@@ -90,8 +90,7 @@ void hessian(Eigen::Index r, int blocks, int t, NewtonWorkspace& ws) {
       ws.H.middleRows(i * t, t).noalias() += ws.Bc.middleRows<D>(i * D).transpose() * ws.SB.middleRows<D>(i * D);
   }
   ws.H *= 2.0;
-  for (Eigen::Index q = 0; q < ws.H.cols(); ++q)
-    for (Eigen::Index p = q + 1; p < ws.H.rows(); ++p) ws.H(p, q) = ws.H(q, p) = 0.5 * (ws.H(p, q) + ws.H(q, p));
+  symmetrize(ws.H);
 }
 
 // Rows row … row + d − 1 of Y replaced by their nearest orthonormal rows (polar factor);

@@ -172,7 +172,8 @@ double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, cons
     const double lmin = lanczos_min_eig(L, delta);
     alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   }
-  return tau >= 1.0 ? alpha : confirm(P, delta, alpha);
+  if (tau >= 1.0) return alpha;
+  return shrink_until_positive(alpha, [&](double a) { trial_ = P + a * delta; });
 }
 
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
@@ -185,14 +186,12 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
   }
   times_block_diagonal(inverse, D, d, G_);  // L⁻¹ Δ, Δ = blkdiag(D)
   B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
-  double alpha = from_min_eigenvalue_of_B(tau);
+  const double alpha = from_min_eigenvalue_of_B(tau);
   if (tau >= 1.0) return alpha;
-  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {  // confirm as in confirm(), Δ added blockwise
+  return shrink_until_positive(alpha, [&](double a) {  // trial_ = P + a Δ, Δ added blockwise
     trial_ = P;
-    for (Eigen::Index i = 0; i < n; i += d) trial_.block(i, i, d, d) += alpha * D.middleRows(i, d).leftCols(d);
-    if (positive_definite()) return alpha;
-  }
-  return 0.0;
+    for (Eigen::Index i = 0; i < n; i += d) trial_.block(i, i, d, d) += a * D.middleRows(i, d).leftCols(d);
+  });
 }
 
 // min(1, τ α_max) from λ_min(B): if no eigenvalue lies below −τ the full step fits; otherwise
@@ -239,15 +238,6 @@ double StepLength::lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::Matrix
     if (j + 1 < steps) T(j, j + 1) = T(j + 1, j) = beta[j];
   }
   return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues()(0);
-}
-
-// Shrinks α by 0.7 until P + αΔ has a Cholesky factorisation (at most 30 tries, then 0).
-double StepLength::confirm(const Eigen::MatrixXd& P, const Eigen::MatrixXd& delta, double alpha) {
-  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
-    trial_ = P + alpha * delta;
-    if (positive_definite()) return alpha;
-  }
-  return 0.0;
 }
 
 bool StepLength::positive_definite() {

@@ -49,7 +49,16 @@ class StepLength {
  private:
   double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bracket λ_min
   double lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta);
-  double confirm(const Eigen::MatrixXd& P, const Eigen::MatrixXd& delta, double alpha);  // shrink α until trial_ ≻ 0
+  // Shrinks α by 0.7 until P + αΔ, which form_trial(α) writes into trial_, has a Cholesky
+  // factorisation (at most 30 tries, then 0).
+  template <class FormTrial>
+  double shrink_until_positive(double alpha, FormTrial form_trial) {
+    for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
+      form_trial(alpha);
+      if (positive_definite()) return alpha;
+    }
+    return 0.0;
+  }
   bool positive_definite();  // Cholesky test of trial_
 
   Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
