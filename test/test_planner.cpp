@@ -127,6 +127,43 @@ TEST(PlannerRules, RandomSwarmsPlanningBlindKeepTheSeparation) {
   EXPECT_GT(moves, 300);
 }
 
+// Synchronised spins: the slot is the rest-to-rest min-jerk time of a move_max flight (peak
+// speed 1.875 D/T at v_max = 0.8 m/s: T = 3.516 s) plus move_settle, and no planned move (random
+// swarms, with and without obstacles, every status) lasts longer than the slot without the settle.
+TEST(PlannerRules, NoMoveOutlastsTheSynchronisedSpinSlot) {
+  fact::PlannerParams p;
+  const double flight = 1.875 * p.move_max / p.v_max;  // the velocity bound dominates at the defaults
+  ASSERT_GT(flight, std::sqrt(5.7735 * p.move_max / p.a_max));
+  EXPECT_NEAR(fact::move_slot(p), flight + p.move_settle, 0.05 * flight);
+  EXPECT_GE(fact::move_slot(p), flight + p.move_settle - 1e-9);
+  EXPECT_NEAR(fact::takeoff_slot(0.0, p), 1.875 * p.takeoff_max / p.v_max + p.move_settle, 0.05 * flight);
+  EXPECT_DOUBLE_EQ(fact::takeoff_slot(p.takeoff_max, p), p.move_settle);  // already there: only the settle
+  const std::vector<fact::ObstacleBox> pieces = {box(Vector3d(-0.5, 1.0, 0), Vector3d(0.5, 1.4, 3)),
+                                                 box(Vector3d(1.2, -2, 0), Vector3d(1.5, 2, 3))};
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(-3, 3), h(1.2, 1.6);
+  const fact::ResultStatus statuses[] = {fact::ResultStatus::ambiguous, fact::ResultStatus::not_certified,
+                                         fact::ResultStatus::none};
+  double longest = 0;
+  int moves = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    fact::PlannerInput in = input_at(Vector3d(u(gen), u(gen), h(gen)), statuses[trial % 3], trial + 1);
+    for (int k = 0; k < 1 + trial % 4; ++k) in.observed.push_back(Vector3d(u(gen), u(gen), h(gen)));
+    const fact::Plan plan = fact::plan_step(in, trial % 2 ? pieces : std::vector<fact::ObstacleBox>{}, p);
+    if (plan.kind != fact::PlanKind::move) continue;
+    ++moves;
+    longest = std::max(longest, plan.trajectory.duration());
+  }
+  EXPECT_GT(moves, 150);
+  EXPECT_LE(longest, fact::move_slot(p) - p.move_settle + 1e-9);
+  EXPECT_GT(longest, 0.8 * flight) << "the trials should include full-length moves";
+  fact::PlannerParams bad = p;
+  bad.move_settle = -0.1;
+  EXPECT_NE(fact::planner_params_error(bad).find("move_settle"), std::string::npos);
+  bad.move_settle = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(fact::planner_params_error(bad).find("move_settle"), std::string::npos);
+}
+
 TEST(PlannerRules, TargetTowardTheFarthestObservedDrone) {
   fact::PlannerParams p;
   p.random_move_probability = 0;

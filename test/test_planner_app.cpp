@@ -39,6 +39,7 @@
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
 #include "fact/odometry_t.hpp"
+#include "fact/planner.h"
 #include "fact/setpoint_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
@@ -368,6 +369,7 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
   Vector3d move_start = Vector3d::Constant(NAN), move_end = Vector3d::Constant(NAN);
   double min_sep_during_move = std::numeric_limits<double>::infinity();
   bool moving = false;
+  int64_t move_decided_us = 0, spin1_us = 0;  // wall times of the "move round 1" and "spin round 1" states
   w.on_state = [&](const std::string& s) {
     states.push_back(s);
     auto yaw_sp = [&] { return w.setpoints.empty() ? NAN : w.setpoints.back().second.yaw; };
@@ -385,10 +387,12 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
     if (starts_with(s, "move round 1") && !moving && std::isnan(move_start.x())) {
       move_start = w.pos;
       moving = true;
+      move_decided_us = wall_us();
     }
     if (starts_with(s, "spin round 1") && moving) {
       moving = false;
       move_end = w.pos;
+      spin1_us = wall_us();
     }
     if (starts_with(s, "wait round 1")) {
       w.publish_rounds(2);
@@ -420,6 +424,15 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
   EXPECT_GT(moved, 0.5 * max_move) << "the ambiguous result must move the drone";
   EXPECT_LE(moved, max_move + 0.03);
   EXPECT_GE(min_sep_during_move, 1.0) << "came closer than min_separation to another drone";
+  // Synchronised spins: the second spin waits for the longest possible move (1.5 m at 2 m/s and
+  // 6 m/s², this test's limits) plus the settle time, whatever the drone's own move took. The
+  // states arrive every 0.1 s (--status-period), so each time is late by at most that much.
+  fact::PlannerParams limits;
+  limits.v_max = 2;
+  limits.a_max = 6;
+  const double slot = fact::move_slot(limits);
+  EXPECT_NEAR(slot, 1.875 * 1.5 / 2 + 0.5, 0.05);
+  EXPECT_GE((spin1_us - move_decided_us) * 1e-6, slot - 0.15) << "the spin started before the move slot ended";
   // Certified: hold — velocity 0, position constant.
   size_t h0 = w.setpoints.size();
   w.run_for(std::chrono::milliseconds(1000));

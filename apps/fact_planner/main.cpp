@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -104,6 +105,8 @@ void add_flags(CLI::App& app, Options& o) {
   num("--random-move-probability", p.random_move_probability, "Chance of a random direction (0..1)");
   num("--drone-radius", p.drone_radius, "Body bounding sphere (m)");
   num("--obstacle-margin", p.obstacle_margin, "Obstacles inflated by drone radius + this (m)");
+  num("--move-settle", p.move_settle,
+      "Spins start this long after the longest possible move (takeoff) would end, counted from the move decision (s)");
   num("--v-max", p.v_max, "Trajectory speed limit (m/s)");
   num("--a-max", p.a_max, "Trajectory acceleration limit (m/s^2)");
   num("--map-resolution", o.map.resolution, "Local map voxel edge (m)");
@@ -114,7 +117,9 @@ void add_flags(CLI::App& app, Options& o) {
       "A spin turns 2*pi + --spin-overlap so that fact-gossip (a round closes after a full 2*pi of unwrapped\n"
       "yaw) closes the round; its detections are the round's observed drones. Round r (0-based, at least the\n"
       "swarm's complete_rounds at the spin's start) waits for complete_rounds >= r + 1 and then a result with\n"
-      "rounds_used >= r + 1, at most --wait-timeout s. Hover (last commanded position, at rest) on odometry\n"
+      "rounds_used >= r + 1, at most --wait-timeout s. Spins are synchronised: a drone spins only once the\n"
+      "longest move any drone may fly (--move-max at --v-max, --a-max; the takeoff to --takeoff-max) has ended,\n"
+      "plus --move-settle, counted from its move decision, so that no drone observes another in flight. Hover (last commanded position, at rest) on odometry\n"
       "older than --odometry-timeout or an unusable plan; the reason is in the status state.\n"
       "Setpoints (fact::setpoint_t, f_i, FLU): position m, velocity m/s, acceleration m/s^2, yaw rad, yaw_rate rad/s.\n"
       "Exit codes: 0 SIGINT/SIGTERM or --exit-when-done; 3 --exit-when-done at --max-rounds without a\n"
@@ -402,6 +407,13 @@ class Planner {
     phase_state_ = s.str();
   }
 
+  // "; spin at +T s": when the synchronised spin may start (fact::move_slot), for the state line.
+  std::string spin_time(int64_t now) const {
+    std::ostringstream s;
+    s << "; spin at +" << std::fixed << std::setprecision(2) << (spin_not_before_ - now) * 1e-6 << " s";
+    return s.str();
+  }
+
   void start_spin(int64_t now) {
     if (round_ >= o_.max_rounds) {
       fly(fact::hold_trajectory(poses_.newest().position, poses_.newest().yaw), now);
@@ -468,7 +480,8 @@ class Planner {
     } else {
       fly(plan.trajectory, now);
     }
-    enter(Phase::move, now, s.str());
+    spin_not_before_ = now + us(fact::move_slot(o_.planner));
+    enter(Phase::move, now, s.str() + spin_time(now));
   }
 
   void step(int64_t now) {
@@ -497,11 +510,12 @@ class Planner {
         last_.position = poses_.newest().position;
         last_.yaw = poses_.newest().yaw;
         fly(plan.trajectory, now);
-        enter(Phase::takeoff, now, "to " + fmt(plan.target) + ": " + plan.reason);
+        spin_not_before_ = now + us(fact::takeoff_slot(poses_.newest().position.z(), o_.planner));
+        enter(Phase::takeoff, now, "to " + fmt(plan.target) + ": " + plan.reason + spin_time(now));
         break;
       }
       case Phase::takeoff:
-        if (trajectory_done(now)) start_spin(now);
+        if (trajectory_done(now) && now >= spin_not_before_) start_spin(now);
         break;
       case Phase::spin:
         if (trajectory_done(now)) {
@@ -545,7 +559,7 @@ class Planner {
         break;
       }
       case Phase::move:
-        if (trajectory_done(now) && now >= hover_until_) {
+        if (trajectory_done(now) && now >= hover_until_ && now >= spin_not_before_) {
           plan_hover_.clear();
           start_spin(now);
         }
@@ -635,6 +649,7 @@ class Planner {
   std::string state_, phase_state_ = "wait_odometry", plan_hover_;
   fact::Trajectory trajectory_;
   int64_t trajectory_start_ = 0, next_setpoint_ = 0, hover_until_ = 0, done_since_ = 0;
+  int64_t spin_not_before_ = 0;  // the synchronised spin starts no earlier (fact::move_slot, fact::takeoff_slot)
   fact::TrajectorySample last_, hover_phase_end_;  // the last published setpoint; the interrupted trajectory's end
   bool hovering_ = false, certified_ = false, hold_published_ = false;
 };

@@ -77,6 +77,7 @@ std::string planner_params_error(const PlannerParams& p) {
   for (double f : p.fallback_fractions)
     if (!(f > 0 && f <= 1)) return bad("fallback_fractions[]", f);
   if (!std::isfinite(p.min_useful_move) || p.min_useful_move < 0) return bad("min_useful_move", p.min_useful_move);
+  if (!std::isfinite(p.move_settle) || p.move_settle < 0) return bad("move_settle", p.move_settle);
   return "";
 }
 
@@ -167,6 +168,22 @@ Plan plan_spin(const Eigen::Vector3d& position, double yaw, const PlannerParams&
   plan.trajectory.yaw.accel = p.yaw_accel;
   plan.reason = "spin 2π + " + num(p.spin_overlap) + " rad at ≤ " + num(p.spin_rate) + " rad/s";
   return plan;
+}
+
+namespace {
+// Duration of a rest-to-rest straight flight of `distance` m at the trajectory limits (s); 0 for none.
+double flight_time(double distance, const PlannerParams& p) {
+  Trajectory tr;
+  if (!(distance > 0) || !min_jerk_within_limits(TrajectoryStart{}, Eigen::Vector3d(distance, 0, 0), limits_of(p), &tr).empty())
+    return 0;
+  return tr.duration();
+}
+}  // namespace
+
+double move_slot(const PlannerParams& p) { return flight_time(p.move_max, p) + p.move_settle; }
+
+double takeoff_slot(double start_z, const PlannerParams& p) {
+  return flight_time(p.takeoff_max - start_z, p) + p.move_settle;
 }
 
 double max_move_distance(double d, const PlannerParams& p) {

@@ -63,6 +63,10 @@ struct PlannerParams {
   // directions (turned by ±45°, ±90°, ±135°, 180°), each at the same fractions.
   std::vector<double> fallback_fractions{1.0, 0.75, 0.5, 0.25};
   double min_useful_move = 0.1;    // m, shorter alternatives are not worth flying: hover instead
+  // Synchronised spins: after a move decision (or takeoff) a drone spins only once the longest
+  // move (takeoff) any drone may fly has ended, plus this settle time, which covers the spread of
+  // the drones' decision times (the gossip latency). See move_slot.
+  double move_settle = 0.5;        // s
 };
 
 // "" when usable, else which field and value is wrong.
@@ -134,6 +138,17 @@ Plan plan_spin(const Eigen::Vector3d& position, double yaw, const PlannerParams&
 // knows the other). At any time |q_i − q_j| ≥ D − r_i − r_j ≥ D − (D − s)/2 − (D − s)/2 = s.
 // The margin absorbs position noise. d = +inf (no drone known): move_max.
 double max_move_distance(double nearest_distance, const PlannerParams& p);
+
+// Synchronised spins. The estimator takes every drone to be at its round position for the whole
+// round, so no drone may observe while another is still flying to its spot. Every drone decides
+// its move at about the same time (when the swarm's round completes), and no move is longer than
+// move_max, so each waits move_slot(p) from its decision, whatever its own move (or hold), before
+// it spins: the duration of a rest-to-rest move of move_max at the trajectory limits plus
+// move_settle (s). A round completes only when the slowest drone has spun, so the wait costs the
+// swarm at most the gap between the longest move flown and move_max, plus move_settle.
+double move_slot(const PlannerParams& p);
+// The same for the takeoff from `start_z` to the highest takeoff height, takeoff_max (s).
+double takeoff_slot(double start_z, const PlannerParams& p);
 
 // ---- Safety (libccd) ------------------------------------------------------------------------
 
