@@ -15,8 +15,10 @@
 #            serial:DEV[:BAUD]     MAVLink over a serial port (default 921600 bit/s)
 #   --key FILE               the swarm key for fact-gossip (32 raw bytes or 64 hex digits, mode 600);
 #                            --insecure runs without one (bench tests only)
-# Other flags: --roster IDS (the swarm's ids, comma separated), --lcm-url URL (default: LCM's
-# default; use ttl=1 on the swarm's network), --out DIR (logs; default build/run-drone-<id>),
+# Other flags: --roster IDS (the swarm's ids, comma separated), --lcm-url URL (the drone's own
+# bus; default: LCM's default), --swarm-url URL (the swarm's bus, for the gossip only; default:
+# --lcm-url). Best: --lcm-url with ttl=0 (stays on the drone's computer) and --swarm-url with
+# ttl=1 on the swarm's network, so only the gossip crosses between drones; --out DIR (logs; default build/run-drone-<id>),
 # --arm (let fact-fc-bridge arm and switch to OFFBOARD; default: the pilot does), --sim-clock
 # (apps follow fact-sim's clock: simulated hardware), --preflight-timeout S (default 10),
 # --check-only (run the checklist and stop), --no-build.
@@ -33,10 +35,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 die() { echo "run-drone: $*" >&2; echo "run-drone: see --help" >&2; exit 2; }
 id="" camera="" vio="" fc="" key="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
-check_only=0 build=1 preflight_timeout=10
+check_only=0 build=1 preflight_timeout=10 swarm_url=""
 while [ "$#" -gt 0 ]; do
   case "$1" in
-    -h|--help) sed -n '2,30p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,32p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --id) [ "$#" -ge 2 ] || die "--id needs a value"; id=$2; shift 2 ;;
     --camera) [ "$#" -ge 2 ] || die "--camera needs a value"; camera=$2; shift 2 ;;
     --vio) [ "$#" -ge 2 ] || die "--vio needs a value"; vio=$2; shift 2 ;;
@@ -45,6 +47,7 @@ while [ "$#" -gt 0 ]; do
     --insecure) insecure=1; shift ;;
     --roster) [ "$#" -ge 2 ] || die "--roster needs a value"; roster=$2; shift 2 ;;
     --lcm-url) [ "$#" -ge 2 ] || die "--lcm-url needs a value"; lcm_url=$2; shift 2 ;;
+    --swarm-url) [ "$#" -ge 2 ] || die "--swarm-url needs a value"; swarm_url=$2; shift 2 ;;
     --out) [ "$#" -ge 2 ] || die "--out needs a value"; out=$2; shift 2 ;;
     --arm) arm=1; shift ;;
     --sim-clock) sim_clock=1; shift ;;
@@ -146,6 +149,7 @@ fi
 [ "$check_only" = 1 ] && { echo "run-drone: --check-only: the checklist passed"; exit 0; }
 gossip_flags=("${keyflag[@]}")
 [ -n "$roster" ] && gossip_flags+=(--roster "$roster")
+[ -n "$swarm_url" ] && gossip_flags+=(--swarm-url "$swarm_url")
 start fact-gossip "$B/apps/fact-gossip$x" "${common[@]}" "${gossip_flags[@]}"
 start fact-solver "$B/apps/fact-solver$x" "${common[@]}"
 start fact-planner "$B/apps/fact_planner/fact-planner$x" "${common[@]}" "${pla_src[@]}"

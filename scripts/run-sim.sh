@@ -10,8 +10,11 @@
 #
 # Flags (see --help): --drones N, --world FILE, --seed S, --realtime | --fast, --out DIR,
 # --max-sim-time S, --resolution WxH, --camera-rate HZ, --shared-namespace, --no-build, --quiet.
-# Writes to --out: run.lcm (LCM log of the swarm bus: odometry, detections, gossip, rounds,
-# results, setpoints, FC state, truth, clock, status; frames stay on the per-drone camera groups),
+# Buses, as on real drones: each drone's apps talk on the drone's own bus (a multicast group and
+# port per drone); only the gossip crosses between drones, on the swarm bus, which also carries the
+# simulator's truth. Writes to --out: run.lcm (LCM log of every bus, merged: odometry, detections,
+# gossip, rounds, results, setpoints, FC state, truth, clock, status; frames stay on the per-drone
+# camera groups),
 # run.png (top-down picture), report.json (fact-run-report-v1), cpu.csv (CPU per app per drone),
 # logs/<app>-<id>.log. Exit codes: 0 certified and within the error bounds; 3 not certified
 # (no certified result, or no result at all, within --max-sim-time, or a planner gave up); 4
@@ -103,7 +106,7 @@ out="$(cd "$out" && pwd)"
 
 # ---------------------------------------------------------------- install and build (outside the namespace)
 if [ -z "${FACT_RUN_SIM_INNER:-}" ]; then
-  targets=(fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge fact-run-report)
+  targets=(fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge fact-run-report fact-log-merge)
   if [ "$build" = 1 ]; then
     "$here/scripts/install-deps.sh"
     mkdir -p "$build_dir"
@@ -155,7 +158,8 @@ B="$FACT_RUN_SIM_BUILD"
 bin_sim="$B/apps/fact_sim/fact-sim" bin_det="$B/apps/fact_detector/fact-detector" bin_vio="$B/apps/fact-vio-relay"
 bin_gos="$B/apps/fact-gossip" bin_sol="$B/apps/fact-solver" bin_pla="$B/apps/fact_planner/fact-planner"
 bin_fcb="$B/firmware_bridge/fact-fc-bridge" bin_rep="$B/apps/fact_run_report/fact-run-report"
-for b in "$bin_sim" "$bin_det" "$bin_vio" "$bin_gos" "$bin_sol" "$bin_pla" "$bin_fcb" "$bin_rep"; do
+bin_mrg="$B/apps/fact-log-merge"
+for b in "$bin_sim" "$bin_det" "$bin_vio" "$bin_gos" "$bin_sol" "$bin_pla" "$bin_fcb" "$bin_rep" "$bin_mrg"; do
   [ -x "$b" ] || { echo "run-sim: $b is missing (build first, or drop --no-build)" >&2; exit 1; }
 done
 command -v lcm-logger >/dev/null || { echo "run-sim: lcm-logger not found (liblcm-bin)" >&2; exit 1; }
@@ -168,7 +172,13 @@ for id in $ids; do  # each drone's camera group is 239.255.77.<id>
   [ "$id" -le 255 ] || { echo "run-sim: drone id $id in $world: run-sim.sh supports ids 0..255" >&2; exit 2; }
 done
 
+# The swarm bus: the gossip between drones, and the simulator's truth and status.
 BUS='udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152'
+# Each drone's own bus ({id} and {7800+id} as for FRAMES below): its odometry, detections, rounds,
+# result, setpoints, FC state, status and the simulation clock. A drone's apps never receive
+# another drone's traffic, so the CPU a drone uses does not grow with the swarm.
+DRONE_BUS='udpm://239.255.78.{id}:{7800+id}?ttl=1&recv_buf_size=2097152'
+drone_url() { local u=${DRONE_BUS//\{id\}/$1}; echo "${u//\{7800+id\}/$((7800 + $1))}"; }
 # Frames: a multicast group and port per drone ({id} and {7700+id} are filled in per drone), so a
 # drone's apps never receive another drone's frames, even when the drones share a namespace.
 FRAMES='udpm://239.255.77.{id}:{7700+id}?ttl=1&recv_buf_size=8388608'
@@ -181,11 +191,11 @@ rm -rf "$out/logs"
 mkdir -p "$out/logs"
 rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-params.txt"
 
-pids=() names=() logger_pid=""
+pids=() names=() logger_pids=()
 cleanup() {
-  for pid in "${pids[@]}" $logger_pid; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}" "${logger_pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
   sleep 0.3
-  for pid in "${pids[@]}" $logger_pid; do kill -KILL "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}" "${logger_pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
   if [ "$FACT_RUN_SIM_INNER" = netns ]; then
     for id in $ids; do ip netns del "$prefix-$id" 2>/dev/null || true; done
     ip link del fact-br0 2>/dev/null || true
@@ -238,16 +248,23 @@ start() {
 # What a replay needs to start the same planners (scripts/replay.sh reads it): key=value lines.
 printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\n' "${ids// /,}" "$seed" "$spin_rate" "$max_rounds" >"$out/run-params.txt"
 
-# The recorder runs at a higher priority (where allowed), so that a loaded machine does not make it
-# drop messages from its socket buffer.
-nice -n -5 lcm-logger --lcm-url="${BUS%%&*}&recv_buf_size=16777216" --quiet "$out/run.lcm" >"$out/logs/lcm-logger.log" 2>&1 &
-logger_pid=$!
+# One recorder per bus (an LCM URL is one group), merged into run.lcm at the end. They run at a
+# higher priority (where allowed), so that a loaded machine does not make them drop messages from
+# their socket buffers.
+bus_logs=()
+record() {  # record URL NAME
+  nice -n -5 lcm-logger --lcm-url="${1%%&*}&recv_buf_size=16777216" --quiet "$out/logs/$2.lcm" >"$out/logs/lcm-logger-$2.log" 2>&1 &
+  logger_pids+=("$!")
+  bus_logs+=("$out/logs/$2.lcm")
+}
+record "$BUS" bus-swarm
+for id in $ids; do record "$(drone_url "$id")" "bus-$id"; done
 
 for id in $ids; do
-  c=(--drone-id "$id" --lcm-url "$BUS" --sim-clock)
+  c=(--drone-id "$id" --lcm-url "$(drone_url "$id")" --sim-clock)
   start "fact-vio-relay-$id" "$id" "$bin_vio" "${c[@]}"
   start "fact-detector-$id" "$id" "$bin_det" "${c[@]}" --frames-url "$(frames_url "$id")"
-  start "fact-gossip-$id" "$id" "$bin_gos" "${c[@]}" --insecure --min-members "$n" --roster "${ids// /,}"
+  start "fact-gossip-$id" "$id" "$bin_gos" "${c[@]}" --swarm-url "$BUS" --insecure --min-members "$n" --roster "${ids// /,}"
   start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}"
   start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(frames_url "$id")" --seed "$((seed * 100 + id))" \
     --spin-rate "$spin_rate" --max-rounds "$max_rounds"
@@ -258,6 +275,7 @@ rate=1
 [ "$mode" = fast ] && rate=$fast_rate
 sim_flags=(--world "$world" ${drones:+--drones "$drones"} --seed "$seed" --rate "$rate" --duration "$max_sim"
            --resolution "$resolution" --camera-rate "$camera_rate" --lcm-url "$BUS" --frames-url "$FRAMES"
+           --drone-url "$DRONE_BUS"
            --mavlink-port "$MAV_BASE" --mavlink-bind "$sim_addr")
 [ "$mode" = fast ] && sim_flags+=(--lockstep)
 sleep 0.5  # let every app subscribe before the clock starts
@@ -336,16 +354,24 @@ done
 for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
 for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
 pids=()
-# Let the recorder drain its socket before it stops: wait until the log stops growing.
+# Let the recorders drain their sockets before they stop: wait until the logs stop growing.
 size=-1
 for _ in $(seq 50); do
-  now=$(stat -c %s "$out/run.lcm" 2>/dev/null || echo 0)
+  now=$(cat "${bus_logs[@]}" 2>/dev/null | wc -c)
   [ "$now" = "$size" ] && break
   size=$now
   sleep 0.2
 done
-kill -INT "$logger_pid" 2>/dev/null || true
-wait "$logger_pid" 2>/dev/null || true
+for pid in "${logger_pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
+for pid in "${logger_pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+logger_pids=()
+# One log of the whole run; the per-bus logs go once it is written.
+if "$bin_mrg" --output "$out/run.lcm" "${bus_logs[@]}" >"$out/logs/fact-log-merge.log" 2>&1; then
+  rm -f "${bus_logs[@]}"
+else
+  cat "$out/logs/fact-log-merge.log" >&2
+  echo "run-sim: merging the bus logs failed; they are kept in $out/logs" >&2
+fi
 
 echo "== run ended: $verdict, after $(printf '%.1f' "$wall_s") s of wall time"
 planner_codes=""

@@ -2,7 +2,7 @@
 # its full app set in a private network namespace, --fast; the certified result is judged against
 # ground truth by fact-run-report. Serial: it times nothing, but it is the heaviest test.
 set(FACT_E2E_TARGETS fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge
-    fact-run-report fact-log-compare)
+    fact-run-report fact-log-compare fact-log-merge)
 set(FACT_E2E_READY TRUE)
 foreach(t IN LISTS FACT_E2E_TARGETS)
   if(NOT TARGET ${t})

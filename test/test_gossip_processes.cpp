@@ -37,6 +37,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -359,6 +360,61 @@ TEST_F(GossipProcesses, LossyRestartedAndAttackedSwarmAgreesByteForByte) {
 // two tracks go in on FACT_ODOMETRY_4 / FACT_DETECTIONS_4; the round packet it publishes (in its
 // swarm_rounds_t, alone with --min-members 1) must be exactly what fact::gossip::RoundBuilder
 // makes of the same samples. Bad input on its channels is counted, not fatal.
+// --swarm-url: each gossip reads its rounds and publishes the complete data on its own drone's
+// bus, and only FACT_GOSSIP crosses the swarm bus, as run-sim.sh and run-drone.sh use it. No relay
+// joins the buses here: the two gossips can only meet on the swarm bus.
+TEST_F(GossipProcesses, OnlyTheGossipCrossesTheSwarmBus) {
+  Observer drones({drone_url(0), drone_url(1)});
+  ASSERT_TRUE(drones.good);
+  std::map<std::string, int> swarm_channels;  // what the swarm bus carried, by channel
+  lcm::LCM swarm(kSwarmUrl);
+  ASSERT_TRUE(swarm.good());
+  swarm.subscribeFunction(
+      ".*", +[](const lcm::ReceiveBuffer*, const std::string& channel, std::map<std::string, int>* seen) { ++(*seen)[channel]; },
+      &swarm_channels);
+  Processes procs;
+  for (int i = 0; i < 2; ++i) {
+    std::vector<std::string> a = gossip_args(i, drone_url(i), dir_ + "/swarm.key", false);
+    a.insert(a.end(), {"--swarm-url", kSwarmUrl});
+    a[std::find(a.begin(), a.end(), "--min-members") - a.begin() + 1] = "2";
+    procs.start("gossip" + std::to_string(i), a, log_);
+  }
+  ASSERT_TRUE(drones.wait_for([&] { return drones.have_status({{"fact-gossip", 0}, {"fact-gossip", 1}}); }, 10))
+      << "the gossips are not up";
+  drones.spin(500);
+  for (int round = 0; round < 2; ++round)
+    for (int i = 0; i < 2; ++i) {
+      const fact::round_packet_t m = injected(i, round);
+      drones.at(static_cast<size_t>(i)).publish("FACT_ROUND_PACKET_" + std::to_string(i), &m);
+    }
+  const auto complete = [&] {
+    for (int i = 0; i < 2; ++i)
+      if (!drones.latest_rounds.count(i) || drones.latest_rounds[i].complete_rounds != 2) return false;
+    return true;
+  };
+  const int64_t end = now_us() + static_cast<int64_t>(fact::test::scaled_s(10) * 1e6);
+  while (!complete() && now_us() < end) {
+    drones.spin(20);
+    while (swarm.handleTimeout(0) > 0) {
+    }
+  }
+  ASSERT_TRUE(complete()) << "the two drones did not complete rounds 0–1 over the swarm bus";
+  drones.settle(0.5);
+  while (swarm.handleTimeout(0) > 0) {
+  }
+  // Both hold the same packets: drone 0's complete data holds drone 1's rounds, which only the
+  // swarm bus could have brought.
+  EXPECT_EQ(drones.latest_rounds[0].num_packets, 4);
+  EXPECT_EQ(drones.latest_rounds[1].num_packets, 4);
+  ASSERT_GT(swarm_channels["FACT_GOSSIP"], 0);
+  for (const auto& [channel, n] : swarm_channels) {  // LCM_SELF_TEST: each new udpm instance checks itself
+    if (channel == "LCM_SELF_TEST") continue;
+    EXPECT_EQ(channel, "FACT_GOSSIP") << n << " message(s) on " << channel << " leaked onto the swarm bus";
+  }
+  const auto codes = procs.stop_all();
+  for (const auto& [name, code] : codes) EXPECT_EQ(code, 0) << name;
+}
+
 TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   const std::string url = drone_url(4);
   Observer obs({url});

@@ -377,6 +377,62 @@ TEST_F(SimApp, FramesOnPerDroneUrlsAndRenderThreadsDoNotChangeThem) {
   EXPECT_GE(compared, 3);
 }
 
+// --drone-url: each drone's raw VIO and the clock go to its own bus, none of its VIO to --lcm-url
+// (truth and the clock stay there), and --lockstep hears a detector's answer on its drone's bus.
+TEST_F(SimApp, DroneBusesCarryEachDronesVioClockAndLockstep) {
+  const int port = 7830;
+  Listener main_bus(listen_url(port));
+  std::vector<std::unique_ptr<Listener>> buses;
+  for (int id = 0; id < 2; ++id)
+    buses.push_back(std::make_unique<Listener>("udpm://239.255.78." + std::to_string(id) + ":" +
+                                               std::to_string(port + 1 + id) + "?ttl=0&recv_buf_size=4194304"));
+  int64_t answered = 0;
+  struct Answer {  // drone 0's "detector": frames from the main bus, answers on drone 0's bus
+    lcm::LCM* bus;
+    int64_t* answered;
+    void on(const lcm::ReceiveBuffer* b, const std::string&) {
+      fact::frame_t f;
+      if (!fact::app::decode_error(b->data, static_cast<int>(b->data_size), &f).empty()) return;
+      fact::detections_t d;
+      d.utime = f.utime;
+      d.drone_id = f.drone_id;
+      d.frame_seq = f.seq;
+      d.count = 0;
+      bus->publish("FACT_DETECTIONS_0", &d);
+      ++*answered;
+    }
+  } answer{&buses[0]->lcm(), &answered};
+  main_bus.lcm().subscribe("FACT_FRAMES_0", &Answer::on, &answer);
+  SimProcess sim({"--duration", "1.0", "--rate", "0", "--drones", "2", "--camera-rate", "10", "--lockstep",
+                  "--lockstep-timeout", "2", "--lcm-url", url(port), "--drone-url",
+                  "udpm://239.255.78.{id}:{" + std::to_string(port + 1) + "+id}?ttl=0"});
+  EXPECT_TRUE(main_bus.pump_until([&] { return main_bus.stopped(); }, 30)) << sim.err();
+  for (auto& b : buses) b->pump_until([] { return false; }, 0.2);
+  EXPECT_EQ(sim.wait(), 0) << sim.err();
+  EXPECT_TRUE(main_bus.odometry.empty()) << "raw VIO leaked onto --lcm-url";
+  EXPECT_FALSE(main_bus.truth.empty());
+  EXPECT_FALSE(main_bus.clock.empty());
+  for (int id = 0; id < 2; ++id) {
+    const Listener& b = *buses[static_cast<size_t>(id)];
+    const std::string own = "FACT_VIO_RAW_" + std::to_string(id), other = "FACT_VIO_RAW_" + std::to_string(1 - id);
+    ASSERT_TRUE(b.odometry.count(own)) << own << " is not on drone " << id << "'s bus";
+    EXPECT_GE(b.odometry.at(own).size(), 50u) << own;
+    EXPECT_FALSE(b.odometry.count(other)) << other << " reached drone " << id << "'s bus";
+    EXPECT_GE(b.clock.size(), 50u) << "drone " << id << "'s bus has no clock";
+    EXPECT_TRUE(b.truth.empty()) << "truth on drone " << id << "'s bus";
+  }
+  // Drone 1 has no detector: timed out once. Drone 0's answers, on its own bus, were heard (a
+  // frame lost to UDP on a loaded machine can time it out, at most twice).
+  const std::string err = sim.err();
+  EXPECT_NE(err.find("drone 1's detector has not answered"), std::string::npos) << err;
+  size_t drone0_timeouts = 0;
+  for (size_t at = err.find("drone 0's detector has not answered"); at != std::string::npos;
+       at = err.find("drone 0's detector has not answered", at + 1))
+    ++drone0_timeouts;
+  EXPECT_LE(drone0_timeouts, 2u) << err;
+  EXPECT_GE(answered, 8);
+}
+
 // --lockstep: a frame waits for every drone's detections of the previous frame. Drone 0's
 // "detector" (this test) answers every frame it receives; drone 1 has none, so it times out once
 // and is then not waited for, which the log names. A frame this process did not receive (UDP on a

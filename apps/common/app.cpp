@@ -299,7 +299,6 @@ int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(
   int64_t deadline = every(now_us());
   while (!stop_requested()) {
     int64_t wait = std::clamp<int64_t>(deadline - now_us(), 0, max_wait_us);
-    if (following_sim_clock()) wait = std::min<int64_t>(wait, 1000);
     const int r = wait_and_handle(all, wait);
     if (r == 1) return 1;
     if (r == 2) break;

@@ -174,8 +174,8 @@ int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> ever
 // (µs, the now_us() clock) of its next deadline, and the loop waits on the LCM socket until that
 // deadline (at most max_wait_us) with microsecond resolution, handling messages as they come, so
 // a deadline is met as closely as the scheduler allows rather than on a polling grid. Under the
-// simulation clock the wait is also capped at 1 ms of wall time (simulated time moves by ticks).
-// `more` as in run_loop.
+// simulation clock the wait needs no cap: simulated time moves only when a tick arrives on a
+// polled socket, and that ends the wait. `more` as in run_loop.
 int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every,
                       const std::vector<lcm::LCM*>& more = {});
 

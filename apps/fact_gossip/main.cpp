@@ -8,6 +8,8 @@
 // Subscribes: FACT_DETECTIONS_<id> (detections_t) and FACT_ODOMETRY_<id> (odometry_t), or with
 // --rounds-from-channel FACT_ROUND_PACKET_<id> (round_packet_t, numbered by their sender);
 // FACT_GOSSIP (gossip_packet_t). Publishes: FACT_GOSSIP, FACT_SWARM_ROUNDS_<id>, FACT_STATUS.
+// With --swarm-url, FACT_GOSSIP (in and out) is on that URL, the swarm's bus, and everything else
+// on --lcm-url, the drone's own bus: the only traffic between drones is the gossip.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.
 #include "common/app.h"
 #include "common/flags.h"
@@ -23,10 +25,10 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -61,6 +63,7 @@ struct Flags {
   int future_window = 16;                   // rounds accepted past what is held
   int max_observations = 64;                // per round packet
   std::string gossip_channel = "FACT_GOSSIP";
+  std::string swarm_url;                    // "" = the gossip on --lcm-url too
   std::string detections_channel;           // default FACT_DETECTIONS_<id>
   std::string odometry_channel;             // default FACT_ODOMETRY_<id>
   std::string round_channel;                // default FACT_ROUND_PACKET_<id>
@@ -78,10 +81,11 @@ std::string ids_text(const std::vector<int>& ids) {
 class GossipApp {
  public:
   GossipApp(const Flags& f, const fact::gossip::Options& go, const fact::gossip::BuilderOptions& bo,
-            const fact::app::SwarmKey& key, lcm::LCM* lcm, int64_t start)
+            const fact::app::SwarmKey& key, lcm::LCM* lcm, lcm::LCM* swarm, int64_t start)
       : f_(f),
         key_(key),
         lcm_(lcm),
+        swarm_(swarm),
         log_("fact-gossip", f.common.drone_id),
         status_(lcm, f.common.status_channel, "fact-gossip", f.common.drone_id),
         gossip_(go, start),
@@ -91,7 +95,7 @@ class GossipApp {
   }
 
   void subscribe() {
-    lcm_->subscribe(f_.gossip_channel, &GossipApp::on_gossip, this);
+    swarm_->subscribe(f_.gossip_channel, &GossipApp::on_gossip, this);
     if (f_.rounds_from_channel) {
       lcm_->subscribe(f_.round_channel, &GossipApp::on_round_packet, this);
     } else {
@@ -152,7 +156,7 @@ class GossipApp {
     }
     const fact::gossip_packet_t env = fact::app::make_envelope(f_.common.drone_id, seq_++, kind, std::move(payload), now, key_);
     const int size = env.getEncodedSize();
-    if (lcm_->publish(f_.gossip_channel, &env) != 0) {
+    if (swarm_->publish(f_.gossip_channel, &env) != 0) {
       reject("publish_failed", "publishing on " + f_.gossip_channel + " failed");
       return;
     }
@@ -303,7 +307,8 @@ class GossipApp {
 
   Flags f_;
   fact::app::SwarmKey key_;
-  lcm::LCM* lcm_;
+  lcm::LCM* lcm_;    // the drone's own bus: odometry, detections, swarm rounds, status
+  lcm::LCM* swarm_;  // the swarm's bus: the gossip (lcm_ itself without --swarm-url)
   fact::app::Log log_;
   fact::app::Status status_;
   fact::gossip::Gossip gossip_;
@@ -361,6 +366,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cli.add_option("--max-observations", f.max_observations, "Observations per round packet")->capture_default_str();
   cli.add_option("--gossip-channel", f.gossip_channel, "Swarm channel (gossip_packet_t)")->capture_default_str();
+  cli.add_option("--swarm-url", f.swarm_url,
+                 "LCM URL of the swarm's bus for --gossip-channel; everything else stays on --lcm-url, the drone's own "
+                 "bus (default: the gossip on --lcm-url too)")->type_name("URL");
   cli.add_option("--detections-channel", f.detections_channel, "Default FACT_DETECTIONS_<id>");
   cli.add_option("--odometry-channel", f.odometry_channel, "Default FACT_ODOMETRY_<id>");
   cli.add_option("--round-channel", f.round_channel, "Default FACT_ROUND_PACKET_<id> (with --rounds-from-channel)");
@@ -449,28 +457,38 @@ int main(int argc, char** argv) {
     boot.event("LCM is not usable with URL '" + f.common.lcm_url + "' (bad URL, or no multicast route for udpm)");
     return 1;
   }
+  std::unique_ptr<lcm::LCM> swarm_bus;
+  if (!f.swarm_url.empty() && f.swarm_url != f.common.lcm_url) {
+    swarm_bus = std::make_unique<lcm::LCM>(f.swarm_url);
+    if (!swarm_bus->good()) {
+      boot.event("LCM is not usable with --swarm-url '" + f.swarm_url + "' (bad URL, or no multicast route for udpm)");
+      return 1;
+    }
+  }
+  lcm::LCM* swarm = swarm_bus ? swarm_bus.get() : &lcm;
   fact::app::install_stop_handler();
   if (!fact::app::start_clock(lcm, f.common, boot)) return 1;
   const int64_t start = now_us();
-  GossipApp app(f, go, bo, key, &lcm, start);
+  GossipApp app(f, go, bo, key, &lcm, swarm, start);
   app.subscribe();
   app.log().event(std::string("started: ") + (key.insecure ? "INSECURE (no authentication)" : "authenticated") +
                   ", roster " + (f.roster.empty() ? "open" : ids_text(f.roster)) + ", rounds from " +
                   (f.rounds_from_channel ? f.round_channel
                                          : f.odometry_channel + " + " + f.detections_channel +
                                                (f.round_period > 0 ? " (fixed periods)" : " (spins)")) +
-                  ", gossip on " + f.gossip_channel + ", output " + f.output_channel);
-  while (!fact::app::stop_requested()) {
-    const int64_t now = now_us();
-    app.step(now);
-    const int64_t wait_us = std::clamp<int64_t>(app.next_deadline(now) - now_us(), 0, 100000);
-    const int r = lcm.handleTimeout(static_cast<int>((wait_us + 999) / 1000));
-    if (r < 0) {
-      if (fact::app::stop_requested()) break;
-      if (errno == EINTR) continue;
-      app.log().event("LCM handleTimeout failed: stopping");
-      return 1;
-    }
+                  ", gossip on " + f.gossip_channel + (swarm_bus ? " at " + f.swarm_url : std::string()) +
+                  ", output " + f.output_channel);
+  // Waits until the gossip's next deadline (at most 100 ms) for a message on either bus.
+  const int rc = fact::app::run_deadline_loop(
+      lcm, 100000,
+      [&](int64_t now) {
+        app.step(now);
+        return app.next_deadline(now);
+      },
+      swarm_bus ? std::vector<lcm::LCM*>{swarm_bus.get()} : std::vector<lcm::LCM*>{});
+  if (rc != 0) {
+    app.log().event("LCM failed: stopping");
+    return 1;
   }
   app.log().event("stopping (signal)");
   return 0;

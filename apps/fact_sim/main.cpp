@@ -10,7 +10,9 @@
 // simulation time in utime; it starts at --epoch-utime, so runs are reproducible.
 // With --mavlink-port BASE each drone instead has a simulated PX4 (sim_fc.h) on UDP
 // --mavlink-bind:(BASE + drone id), driven by fact-fc-bridge over MAVLink v2; LCM setpoints are
-// then not read.
+// then not read. --frames-url and --drone-url give each drone its own LCM for its frames and for
+// its VIO, clock, setpoints and (--lockstep) detections, as on a real drone, whose apps share
+// nothing with the others' but the gossip.
 //
 // Exit codes: 0 at --duration or on SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.
 #include "common/app.h"
@@ -26,6 +28,7 @@
 
 #include <CLI/CLI.hpp>
 #include <arpa/inet.h>
+#include <poll.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -73,6 +76,7 @@ struct Options {
   std::string mavlink_bind = "127.0.0.1";
   bool fc_auto_arm = false;
   std::string frames_url;           // "" = frames on lcm_url; else a URL template, "{id}" = the drone id
+  std::string drone_url;            // "" = each drone's VIO, clock, setpoints, detections on lcm_url; else a template
   bool lockstep = false;            // wait for every detector's answer to a frame before the next frame
   double lockstep_timeout = 2.0;    // s of wall time a frame waits for a detector before going on without it
   std::string detections_channel = "FACT_DETECTIONS";
@@ -118,6 +122,12 @@ void add_flags(CLI::App& app, Options& o) {
                  "LCM URL template for each drone's frames, \"{id}\" replaced by the drone id and \"{B+id}\" by "
                  "B + id (e.g. udpm://239.255.77.{id}:{7700+id}?ttl=1): a camera group and port per drone that "
                  "only its detector and planner join. Default: frames go on --lcm-url")
+      ->type_name("URL");
+  app.add_option("--drone-url", o.drone_url,
+                 "LCM URL template for each drone's own bus (as --frames-url: \"{id}\", \"{B+id}\"), e.g. "
+                 "udpm://239.255.78.{id}:{7800+id}?ttl=1: its raw VIO and the clock go there, and its setpoints and "
+                 "(--lockstep) detections are read there, so its apps need not share a bus with the other drones'. "
+                 "Truth and status stay on --lcm-url, which also gets the clock. Default: everything on --lcm-url")
       ->type_name("URL");
   app.add_flag("--lockstep", o.lockstep,
                "Before each frame, wait until every drone's detector has answered the previous one "
@@ -245,6 +255,7 @@ struct Drone {
   std::unique_ptr<fact::sim_fc::SimFc> fc;      // with --mavlink-port: its simulated PX4
   std::unique_ptr<fact::sim_fc::FcPort> fc_port;
   lcm::LCM* frames_lcm = nullptr;   // where its frames go (--frames-url), else the main LCM
+  lcm::LCM* bus = nullptr;          // its own bus (--drone-url): VIO and clock out, setpoints and detections in
   std::unique_ptr<fact::sim::Renderer> renderer;  // its camera, with its own noise stream
   fact::sim::RenderedFrame frame;   // its newest rendered frame
   int64_t answered_utime = -1;      // --lockstep: newest frame utime its detector answered
@@ -313,6 +324,45 @@ class Simulator {
     return "";
   }
 
+  // Opens each drone's own bus (--drone-url, as open_frame_urls); without it every drone's bus
+  // is the main LCM. Call before subscribe() and subscribe_detections(). "" when fine, else the
+  // URL that failed.
+  std::string open_drone_urls() {
+    buses_ = {lcm_};
+    for (Drone& d : drones_) {
+      d.bus = lcm_;
+      if (o_.drone_url.empty()) continue;
+      const std::string url = frames_url_for(o_.drone_url, d.sim.id);
+      if (url == o_.lcm_url) continue;  // the main LCM itself
+      auto& slot = bus_lcms_[url];
+      if (!slot) {
+        slot = std::make_unique<lcm::LCM>(url);
+        if (!slot->good()) return url;
+        buses_.push_back(slot.get());
+      }
+      d.bus = slot.get();
+    }
+    return "";
+  }
+
+  // handleTimeout over the main LCM and every drone bus: waits up to timeout_ms for a message on
+  // any, then handles one on each that has one. > 0 when something was handled, 0 on timeout,
+  // < 0 when polling or LCM failed.
+  int handle_timeout(int timeout_ms) {
+    if (buses_.size() <= 1) return lcm_->handleTimeout(timeout_ms);
+    std::vector<pollfd> fds;
+    for (lcm::LCM* b : buses_) fds.push_back(pollfd{b->getFileno(), POLLIN, 0});
+    const int r = poll(fds.data(), fds.size(), timeout_ms);
+    if (r <= 0) return r;
+    int handled = 0;
+    for (size_t i = 0; i < fds.size(); ++i) {
+      if (!(fds[i].revents & POLLIN)) continue;
+      if (buses_[i]->handle() < 0) return -1;
+      ++handled;
+    }
+    return handled;
+  }
+
   // The template with "{id}" replaced by the id and "{B+id}" (B an integer) by B + id, so each drone
   // can have its own group and port: Linux hands a udpm socket bound to a port the datagrams of
   // every group joined on that port in its network namespace, so a group alone does not separate
@@ -342,7 +392,7 @@ class Simulator {
   void subscribe_detections() {
     for (size_t i = 0; i < drones_.size(); ++i) {
       const std::string ch = fact::app::channel(o_.detections_channel, drones_[i].sim.id);
-      lcm_->subscribe(ch, &Simulator::on_detections_raw, this)->setQueueCapacity(100);
+      drones_[i].bus->subscribe(ch, &Simulator::on_detections_raw, this)->setQueueCapacity(100);
       detections_index_.push_back(ch);
     }
   }
@@ -366,7 +416,7 @@ class Simulator {
   void subscribe() {
     for (size_t i = 0; i < drones_.size(); ++i) {
       const std::string ch = fact::app::channel(o_.setpoint_channel, drones_[i].sim.id);
-      lcm_->subscribe(ch, &Simulator::on_setpoint_raw, this)->setQueueCapacity(1000);
+      drones_[i].bus->subscribe(ch, &Simulator::on_setpoint_raw, this)->setQueueCapacity(1000);
       channel_index_.push_back(ch);
     }
   }
@@ -485,7 +535,7 @@ class Simulator {
     fact::sim_clock_t clock;
     clock.utime = utime;
     clock.rate = o_.rate;
-    lcm_->publish(o_.clock_channel, &clock);
+    for (lcm::LCM* b : buses_) b->publish(o_.clock_channel, &clock);
     if (due(t, o_.odometry_rate, n_odom)) publish_odometry(utime);
     if (due(t, o_.camera_rate, n_cam) && !publish_frames(utime)) return false;
     if (due(t, o_.truth_rate, n_truth)) publish_truth(utime);
@@ -528,7 +578,7 @@ class Simulator {
       m.yaw = v.yaw;
       m.roll = v.roll;
       m.pitch = v.pitch;
-      lcm_->publish(fact::app::channel(o_.vio_channel, d.sim.id), &m);
+      d.bus->publish(fact::app::channel(o_.vio_channel, d.sim.id), &m);
       status_->count("odometry");
     }
   }
@@ -555,7 +605,7 @@ class Simulator {
           }
         break;
       }
-      if (lcm_->handleTimeout(10) < 0 && !fact::app::stop_requested()) {
+      if (handle_timeout(10) < 0 && !fact::app::stop_requested()) {
         log_->event("error: LCM failed while waiting for the detectors");
         return false;
       }
@@ -650,7 +700,7 @@ class Simulator {
         const auto left = std::chrono::duration_cast<std::chrono::microseconds>(target - std::chrono::steady_clock::now());
         wait_ms = static_cast<int>(std::max<int64_t>(0, (left.count() + 999) / 1000));
       }
-      const int r = lcm_->handleTimeout(wait_ms);
+      const int r = handle_timeout(wait_ms);
       if (r < 0 && fact::app::stop_requested()) return true;  // SIGINT / SIGTERM interrupted the wait
       if (r < 0) {
         log_->event("error: LCM failed while handling messages");
@@ -676,6 +726,8 @@ class Simulator {
   std::vector<std::string> channel_index_;
   std::vector<std::string> detections_index_;
   std::map<std::string, std::unique_ptr<lcm::LCM>> frame_lcms_;  // --frames-url instances by URL
+  std::map<std::string, std::unique_ptr<lcm::LCM>> bus_lcms_;    // --drone-url instances by URL
+  std::vector<lcm::LCM*> buses_;  // the main LCM, then each distinct drone bus (what is handled)
   int64_t last_frame_utime_ = -1;
   double render_s_ = 0;
   int64_t renders_ = 0;
@@ -726,6 +778,10 @@ int main(int argc, char** argv) {
             ", " + o.resolution + ", script " + o.script + ", epoch " + std::to_string(o.epoch_utime) + " us");
   log.event(world_summary(world, o));
   Simulator sim(o, world, &lcm, &status, &log);
+  if (const std::string bad = sim.open_drone_urls(); !bad.empty()) {
+    log.event("error: cannot open LCM for a drone's bus at " + bad + " (--drone-url " + o.drone_url + ")");
+    return 1;
+  }
   if (o.mavlink_port > 0) {
     try {
       sim.open_flight_controllers();

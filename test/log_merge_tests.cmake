@@ -1,0 +1,8 @@
+# fact-log-merge (apps/fact_log_merge): LCM logs of several buses into one, run as a process.
+if(TARGET fact-log-merge)
+  add_executable(fact_log_merge_tests test_log_merge.cpp)
+  target_compile_definitions(fact_log_merge_tests PRIVATE FACT_LOG_MERGE_BINARY="$<TARGET_FILE:fact-log-merge>${FACT_RUN_SUFFIX}")
+  target_link_libraries(fact_log_merge_tests PRIVATE fact_lcmtypes GTest::gtest_main)
+  add_dependencies(fact_log_merge_tests fact-log-merge)
+  fact_discover_tests(fact_log_merge_tests 60)
+endif()

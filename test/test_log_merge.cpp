@@ -1,0 +1,122 @@
+// fact-log-merge: LCM logs of several buses into one, in timestamp order (scripts/run-sim.sh).
+// The app runs as a process on logs written here with lcm::LogFile; its output is read back.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Event {
+  int64_t timestamp;
+  std::string channel;
+  std::string data;
+};
+
+void write_log(const fs::path& path, const std::vector<Event>& events) {
+  lcm::LogFile log(path.string(), "w");
+  ASSERT_TRUE(log.good()) << path;
+  for (const Event& e : events) {
+    lcm::LogEvent le;
+    le.eventnum = 0;
+    le.timestamp = e.timestamp;
+    le.channel = e.channel;
+    le.datalen = static_cast<int32_t>(e.data.size());
+    le.data = const_cast<char*>(e.data.data());
+    ASSERT_EQ(log.writeEvent(&le), 0);
+  }
+}
+
+std::vector<Event> read_log(const fs::path& path) {
+  std::vector<Event> out;
+  lcm::LogFile log(path.string(), "r");
+  if (!log.good()) return out;
+  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent())
+    out.push_back({e->timestamp, e->channel, std::string(static_cast<const char*>(e->data), e->datalen)});
+  return out;
+}
+
+struct Ran {
+  int code;
+  std::string out;
+};
+
+Ran merge(const std::string& args) {
+  const std::string cmd = std::string(FACT_LOG_MERGE_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  for (size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+class LogMerge : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "fact-log-merge-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+// Three buses, interleaved in time, one timestamp shared by two of them: every event once, in
+// timestamp order, ties in the order of the inputs, bytes and channels unchanged.
+TEST_F(LogMerge, InterleavedBusesInTimestampOrder) {
+  write_log(dir_ / "swarm.lcm", {{100, "FACT_GOSSIP", "g1"}, {250, "FACT_TRUTH", "t1"}, {400, "FACT_GOSSIP", "g2"}});
+  write_log(dir_ / "d0.lcm", {{50, "FACT_ODOMETRY_0", "o0a"}, {250, "FACT_ODOMETRY_0", "o0b"}, {300, "FACT_RESULT_0", "r0"}});
+  write_log(dir_ / "d1.lcm", {{120, "FACT_ODOMETRY_1", std::string("\0\1\2", 3)}});
+  const Ran r = merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "swarm.lcm").string() + " " +
+                      (dir_ / "d0.lcm").string() + " " + (dir_ / "d1.lcm").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("wrote 7 events"), std::string::npos) << r.out;
+  const std::vector<Event> m = read_log(dir_ / "run.lcm");
+  ASSERT_EQ(m.size(), 7u);
+  const std::vector<std::string> channels = {"FACT_ODOMETRY_0", "FACT_GOSSIP", "FACT_ODOMETRY_1", "FACT_TRUTH",
+                                             "FACT_ODOMETRY_0", "FACT_RESULT_0", "FACT_GOSSIP"};
+  const std::vector<int64_t> times = {50, 100, 120, 250, 250, 300, 400};
+  for (size_t i = 0; i < m.size(); ++i) {
+    EXPECT_EQ(m[i].channel, channels[i]) << "event " << i;
+    EXPECT_EQ(m[i].timestamp, times[i]) << "event " << i;
+  }
+  EXPECT_EQ(m[2].data, std::string("\0\1\2", 3));
+  EXPECT_EQ(m[3].data, "t1");  // the tie at 250: the swarm log (first input) first
+  EXPECT_EQ(m[4].data, "o0b");
+}
+
+// A logger stopped mid-write leaves a cut-off last event: every whole event before it is kept.
+TEST_F(LogMerge, CutOffInputKeepsItsWholeEvents) {
+  write_log(dir_ / "a.lcm", {{10, "A", std::string(100, 'a')}, {30, "A", std::string(100, 'b')}});
+  write_log(dir_ / "b.lcm", {{20, "B", "b1"}});
+  fs::resize_file(dir_ / "a.lcm", fs::file_size(dir_ / "a.lcm") - 40);
+  const Ran r = merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "a.lcm").string() + " " +
+                      (dir_ / "b.lcm").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::vector<Event> m = read_log(dir_ / "run.lcm");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].data, std::string(100, 'a'));
+  EXPECT_EQ(m[1].data, "b1");
+}
+
+// An input that cannot be read: exit 2, naming it, and no output written.
+TEST_F(LogMerge, UnreadableInputIsNamedAndNothingIsWritten) {
+  write_log(dir_ / "a.lcm", {{10, "A", "x"}});
+  const fs::path missing = dir_ / "missing.lcm";
+  const Ran r = merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "a.lcm").string() + " " + missing.string());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(missing.string()), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "run.lcm"));
+  EXPECT_EQ(merge("--output " + (dir_ / "run.lcm").string()).code, 2);  // no input
+  const Ran bad_out = merge("--output " + (dir_ / "no" / "such" / "dir.lcm").string() + " " + (dir_ / "a.lcm").string());
+  EXPECT_EQ(bad_out.code, 1) << bad_out.out;
+}
+
+}  // namespace
