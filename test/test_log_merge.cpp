@@ -2,12 +2,12 @@
 // The app runs as a process on logs written here with lcm::LogFile; its output is read back.
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "run_command.h"
 
 namespace fs = std::filesystem;
 
@@ -42,20 +42,9 @@ std::vector<Event> read_log(const fs::path& path) {
   return out;
 }
 
-struct Ran {
-  int code;
-  std::string out;
-};
+using fact::test::Ran;
 
-Ran merge(const std::string& args) {
-  const std::string cmd = std::string(FACT_LOG_MERGE_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
+Ran merge(const std::string& args) { return fact::test::run_command(std::string(FACT_LOG_MERGE_BINARY) + " " + args); }
 
 class LogMerge : public ::testing::Test {
  protected:

@@ -8,6 +8,7 @@
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 #include "fact/truth_t.hpp"
+#include "run_command.h"
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -187,20 +188,9 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
   return path;
 }
 
-struct Ran {
-  int code;
-  std::string out;
-};
+using fact::test::Ran;
 
-Ran run_report(const std::string& args) {
-  const std::string cmd = std::string(FACT_RUN_REPORT_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
+Ran run_report(const std::string& args) { return fact::test::run_command(std::string(FACT_RUN_REPORT_BINARY) + " " + args); }
 
 nlohmann::json read_json(const std::string& path) {
   std::ifstream in(path);
