@@ -26,7 +26,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 usage() {
-  sed -n '2,20p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+  sed -n '2,23p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
   cat <<EOF
 Flags:
   --drones N          drones (default: the world's count, 4 in the default world)
@@ -191,9 +191,26 @@ rm -rf "$out/logs"
 mkdir -p "$out/logs"
 rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-params.txt"
 
-pids=() names=() logger_pids=()
+pids=() names=() logger_pids=() bus_logs=()
+# merge_logs: stops the recorders and merges their bus logs into run.lcm (the bus logs go once it
+# is written). False, keeping the bus logs and no run.lcm, when the merge fails.
+merge_logs() {
+  for pid in "${logger_pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
+  for pid in "${logger_pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+  logger_pids=()
+  if "$bin_mrg" --output "$out/run.lcm" "${bus_logs[@]}" >"$out/logs/fact-log-merge.log" 2>&1; then
+    rm -f "${bus_logs[@]}"
+    return 0
+  fi
+  rm -f "$out/run.lcm"
+  cat "$out/logs/fact-log-merge.log" >&2
+  echo "run-sim: merging the bus logs failed; they are kept in $out/logs" >&2
+  return 1
+}
 cleanup() {
-  for pid in "${pids[@]}" "${logger_pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  # Interrupted before the end: what was recorded still becomes run.lcm.
+  [ "${#logger_pids[@]}" -gt 0 ] && { merge_logs || true; }
   sleep 0.3
   for pid in "${pids[@]}" "${logger_pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
   if [ "$FACT_RUN_SIM_INNER" = netns ]; then
@@ -251,7 +268,6 @@ printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\n' "${ids// /,}" "$seed" "$
 # One recorder per bus (an LCM URL is one group), merged into run.lcm at the end. They run at a
 # higher priority (where allowed), so that a loaded machine does not make them drop messages from
 # their socket buffers.
-bus_logs=()
 record() {  # record URL NAME
   nice -n -5 lcm-logger --lcm-url="${1%%&*}&recv_buf_size=16777216" --quiet "$out/logs/$2.lcm" >"$out/logs/lcm-logger-$2.log" 2>&1 &
   logger_pids+=("$!")
@@ -357,20 +373,15 @@ pids=()
 # Let the recorders drain their sockets before they stop: wait until the logs stop growing.
 size=-1
 for _ in $(seq 50); do
-  now=$(cat "${bus_logs[@]}" 2>/dev/null | wc -c)
+  now=$(stat -c %s "${bus_logs[@]}" 2>/dev/null | awk '{ s += $1 } END { print s + 0 }' || true)
   [ "$now" = "$size" ] && break
   size=$now
   sleep 0.2
 done
-for pid in "${logger_pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
-for pid in "${logger_pids[@]}"; do wait "$pid" 2>/dev/null || true; done
-logger_pids=()
-# One log of the whole run; the per-bus logs go once it is written.
-if "$bin_mrg" --output "$out/run.lcm" "${bus_logs[@]}" >"$out/logs/fact-log-merge.log" 2>&1; then
-  rm -f "${bus_logs[@]}"
-else
-  cat "$out/logs/fact-log-merge.log" >&2
-  echo "run-sim: merging the bus logs failed; they are kept in $out/logs" >&2
+# One log of the whole run.
+if ! merge_logs; then
+  failed=1
+  verdict="$verdict; merging the bus logs into run.lcm failed (see $out/logs/fact-log-merge.log)"
 fi
 
 echo "== run ended: $verdict, after $(printf '%.1f' "$wall_s") s of wall time"
@@ -385,8 +396,8 @@ done
 # (certified-wrong); a log it cannot judge (its 2) is a failed run here (1), as is an app or the
 # simulator that exited early, whatever the log holds.
 rc=0
-"$bin_rep" --log "$out/run.lcm" --world "$world" --png "$out/run.png" --json "$out/report.json" \
-  --yaw-bound "$yaw_bound" --position-bound "$position_bound" || rc=$?
+[ -f "$out/run.lcm" ] && { "$bin_rep" --log "$out/run.lcm" --world "$world" --png "$out/run.png" --json "$out/report.json" \
+  --yaw-bound "$yaw_bound" --position-bound "$position_bound" || rc=$?; }
 echo "== files: $out/run.lcm (LCM log; replay it with scripts/replay.sh $out/run.lcm), $out/run.png (picture),"
 echo "   $out/report.json, $out/cpu.csv, $out/run-params.txt, $out/logs/"
 if [ "$failed" = 1 ]; then

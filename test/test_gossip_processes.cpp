@@ -356,10 +356,6 @@ TEST_F(GossipProcesses, LossyRestartedAndAttackedSwarmAgreesByteForByte) {
   for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name << " did not exit cleanly";
 }
 
-// The round-building path of fact-gossip: odometry (a spin of 2π plus a little) and detections of
-// two tracks go in on FACT_ODOMETRY_4 / FACT_DETECTIONS_4; the round packet it publishes (in its
-// swarm_rounds_t, alone with --min-members 1) must be exactly what fact::gossip::RoundBuilder
-// makes of the same samples. Bad input on its channels is counted, not fatal.
 // --swarm-url: each gossip reads its rounds and publishes the complete data on its own drone's
 // bus, and only FACT_GOSSIP crosses the swarm bus, as run-sim.sh and run-drone.sh use it. No relay
 // joins the buses here: the two gossips can only meet on the swarm bus.
@@ -415,6 +411,10 @@ TEST_F(GossipProcesses, OnlyTheGossipCrossesTheSwarmBus) {
   for (const auto& [name, code] : codes) EXPECT_EQ(code, 0) << name;
 }
 
+// The round-building path of fact-gossip: odometry (a spin of 2π plus a little) and detections of
+// two tracks go in on FACT_ODOMETRY_4 / FACT_DETECTIONS_4; the round packet it publishes (in its
+// swarm_rounds_t, alone with --min-members 1) must be exactly what fact::gossip::RoundBuilder
+// makes of the same samples. Bad input on its channels is counted, not fatal.
 TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   const std::string url = drone_url(4);
   Observer obs({url});

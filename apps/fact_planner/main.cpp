@@ -476,7 +476,7 @@ class Planner {
       status_.count("hover");
       plan_hover_ = std::string("hover: ") + fact::to_string(plan.kind) + " plan: " + plan.reason;
       fly(fact::hold_trajectory(last_.position, last_.yaw), now);
-      hover_until_ = now + 1000000;  // hover one second, then spin again
+      hover_until_ = now + 1000000;  // hover at least one second, then spin when the move slot ends
     } else {
       fly(plan.trajectory, now);
     }
