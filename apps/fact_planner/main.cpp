@@ -119,8 +119,9 @@ void add_flags(CLI::App& app, Options& o) {
       "swarm's complete_rounds at the spin's start) waits for complete_rounds >= r + 1 and then a result with\n"
       "rounds_used >= r + 1, at most --wait-timeout s. Spins are synchronised: a drone spins only once the\n"
       "longest move any drone may fly (--move-max at --v-max, --a-max; the takeoff to --takeoff-max) has ended,\n"
-      "plus --move-settle, counted from its move decision, so that no drone observes another in flight. Hover (last commanded position, at rest) on odometry\n"
-      "older than --odometry-timeout or an unusable plan; the reason is in the status state.\n"
+      "plus --move-settle, counted from its move decision, so that no drone observes another in flight.\n"
+      "Hover (last commanded position, at rest) on odometry older than --odometry-timeout or an unusable plan;\n"
+      "the reason is in the status state.\n"
       "Setpoints (fact::setpoint_t, f_i, FLU): position m, velocity m/s, acceleration m/s^2, yaw rad, yaw_rate rad/s.\n"
       "Exit codes: 0 SIGINT/SIGTERM or --exit-when-done; 3 --exit-when-done at --max-rounds without a\n"
       "certified result; 1 LCM failed; 2 bad flags.");
