@@ -172,17 +172,22 @@ for id in $ids; do  # each drone's camera group is 239.255.77.<id>
   [ "$id" -le 255 ] || { echo "run-sim: drone id $id in $world: run-sim.sh supports ids 0..255" >&2; exit 2; }
 done
 
+# fill_url TEMPLATE ID: the template with "{id}" replaced by ID and "{B+id}" by B + ID, as fact-sim
+# fills its --frames-url and --drone-url templates.
+fill_url() {
+  local u=${1//\{id\}/$2}
+  while [[ $u =~ \{([0-9]+)\+id\} ]]; do u=${u//"${BASH_REMATCH[0]}"/$((BASH_REMATCH[1] + $2))}; done
+  echo "$u"
+}
 # The swarm bus: the gossip between drones, and the simulator's truth and status.
 BUS='udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152'
 # Each drone's own bus ({id} and {7800+id} as for FRAMES below): its odometry, detections, rounds,
 # result, setpoints, FC state, status and the simulation clock. A drone's apps never receive
 # another drone's traffic, so the CPU a drone uses does not grow with the swarm.
 DRONE_BUS='udpm://239.255.78.{id}:{7800+id}?ttl=1&recv_buf_size=2097152'
-drone_url() { local u=${DRONE_BUS//\{id\}/$1}; echo "${u//\{7800+id\}/$((7800 + $1))}"; }
 # Frames: a multicast group and port per drone ({id} and {7700+id} are filled in per drone), so a
 # drone's apps never receive another drone's frames, even when the drones share a namespace.
 FRAMES='udpm://239.255.77.{id}:{7700+id}?ttl=1&recv_buf_size=8388608'
-frames_url() { local u=${FRAMES//\{id\}/$1}; echo "${u//\{7700+id\}/$((7700 + $1))}"; }
 MAV_BASE=14600     # the simulated flight controllers listen on MAV_BASE + id (ids 0..255)
 BRIDGE_BASE=14300  # each fact-fc-bridge binds BRIDGE_BASE + id: never one of the simulator's ports
 prefix="fact-run-$$"
@@ -274,15 +279,15 @@ record() {  # record URL NAME
   bus_logs+=("$out/logs/$2.lcm")
 }
 record "$BUS" bus-swarm
-for id in $ids; do record "$(drone_url "$id")" "bus-$id"; done
+for id in $ids; do record "$(fill_url "$DRONE_BUS" "$id")" "bus-$id"; done
 
 for id in $ids; do
-  c=(--drone-id "$id" --lcm-url "$(drone_url "$id")" --sim-clock)
+  c=(--drone-id "$id" --lcm-url "$(fill_url "$DRONE_BUS" "$id")" --sim-clock)
   start "fact-vio-relay-$id" "$id" "$bin_vio" "${c[@]}"
-  start "fact-detector-$id" "$id" "$bin_det" "${c[@]}" --frames-url "$(frames_url "$id")"
+  start "fact-detector-$id" "$id" "$bin_det" "${c[@]}" --frames-url "$(fill_url "$FRAMES" "$id")"
   start "fact-gossip-$id" "$id" "$bin_gos" "${c[@]}" --swarm-url "$BUS" --insecure --min-members "$n" --roster "${ids// /,}"
   start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}"
-  start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(frames_url "$id")" --seed "$((seed * 100 + id))" \
+  start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(fill_url "$FRAMES" "$id")" --seed "$((seed * 100 + id))" \
     --spin-rate "$spin_rate" --max-rounds "$max_rounds"
   start "fact-fc-bridge-$id" "$id" "$bin_fcb" "${c[@]}" --udp "$((BRIDGE_BASE + id)):$sim_addr:$((MAV_BASE + id))" --arm --offboard
 done

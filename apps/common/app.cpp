@@ -257,26 +257,35 @@ std::vector<lcm::LCM*> loop_instances(lcm::LCM& lcm, const std::vector<lcm::LCM*
 // Waits up to wait_us for any instance's socket, then handles one message on each readable one.
 // 0 when fine (message or timeout), 1 when polling or LCM failed (logged), 2 when stopped.
 int wait_and_handle(const std::vector<lcm::LCM*>& all, int64_t wait_us) {
-  std::vector<pollfd> fds;
-  for (lcm::LCM* m : all) fds.push_back(pollfd{m->getFileno(), POLLIN, 0});
-  const timespec ts{static_cast<time_t>(wait_us / 1000000), static_cast<long>((wait_us % 1000000) * 1000)};
-  const int r = ppoll(fds.data(), fds.size(), &ts, nullptr);
-  if (r < 0 && errno != EINTR) {
+  const int r = handle_any(all, wait_us);
+  if (r == -1) {
     std::cerr << "poll on the LCM sockets failed\n";
     return 1;
   }
-  for (size_t i = 0; r > 0 && i < fds.size(); ++i) {
-    if (!(fds[i].revents & POLLIN)) continue;
-    if (all[i]->handle() < 0) {
-      if (stop_requested()) return 2;
-      std::cerr << "LCM handle failed\n";
-      return 1;
-    }
+  if (r == -2) {
+    if (stop_requested()) return 2;
+    std::cerr << "LCM handle failed\n";
+    return 1;
   }
   return 0;
 }
 
 }  // namespace
+
+int handle_any(const std::vector<lcm::LCM*>& lcms, int64_t wait_us) {
+  std::vector<pollfd> fds;
+  for (lcm::LCM* m : lcms) fds.push_back(pollfd{m->getFileno(), POLLIN, 0});
+  const timespec ts{static_cast<time_t>(wait_us / 1000000), static_cast<long>((wait_us % 1000000) * 1000)};
+  const int r = ppoll(fds.data(), fds.size(), &ts, nullptr);
+  if (r < 0) return errno == EINTR ? 0 : -1;
+  int handled = 0;
+  for (size_t i = 0; r > 0 && i < fds.size(); ++i) {
+    if (!(fds[i].revents & POLLIN)) continue;
+    if (lcms[i]->handle() < 0) return -2;
+    ++handled;
+  }
+  return handled;
+}
 
 int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> every,
              const std::vector<lcm::LCM*>& more) {

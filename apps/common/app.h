@@ -164,6 +164,12 @@ bool decode(const lcm::ReceiveBuffer* rbuf, const std::string& channel, T* msg, 
   return false;
 }
 
+// handleTimeout over several LCM instances (e.g. a drone's own bus and the swarm's): waits up to
+// wait_us for a message on any of them, then handles one on each that has one. Returns how many
+// were handled (> 0); 0 when the wait ran out or a signal interrupted it; -1 when poll failed
+// (errno says why); -2 when an instance's handle() failed.
+int handle_any(const std::vector<lcm::LCM*>& lcms, int64_t wait_us);
+
 // Loops until stop_requested(): waits up to period_ms for a message on lcm or on any of `more`
 // (other LCM instances, e.g. a separate frames URL), handles what arrived, then calls
 // every(now_us()). Returns 0, or 1 (after logging to stderr) if LCM fails.

@@ -26,7 +26,6 @@
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
-#include <poll.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -258,23 +257,18 @@ int main(int argc, char** argv) {
   relay.log().event("started: " + f.drone_url + " <-> " + f.swarm_url + ", drop " + std::to_string(f.drop) + ", dup " +
                     std::to_string(f.dup) + ", reorder " + std::to_string(f.reorder) + " (faults " + f.faults +
                     ", seed " + std::to_string(f.seed) + ")");
-  pollfd fds[2] = {{drone.getFileno(), POLLIN, 0}, {swarm.getFileno(), POLLIN, 0}};
-  lcm::LCM* sides[2] = {&drone, &swarm};
+  const std::vector<lcm::LCM*> sides = {&drone, &swarm};
   while (!fact::app::stop_requested()) {
     const int64_t wait = relay.release(now_us(), 100000);
-    const int r = poll(fds, 2, static_cast<int>((wait + 999) / 1000));
-    if (r < 0) {
-      if (errno == EINTR) continue;
+    const int r = fact::app::handle_any(sides, wait);
+    if (r == -1) {
       relay.log().event(std::string("poll failed: ") + std::strerror(errno));
       return 1;
     }
-    for (int i = 0; i < 2; ++i)
-      if (fds[i].revents & POLLIN) {
-        if (sides[i]->handle() != 0 && !fact::app::stop_requested()) {
-          relay.log().event("LCM handle failed: stopping");
-          return 1;
-        }
-      }
+    if (r == -2 && !fact::app::stop_requested()) {
+      relay.log().event("LCM handle failed: stopping");
+      return 1;
+    }
   }
   relay.log().event("stopping (signal)");
   return 0;

@@ -28,7 +28,6 @@
 
 #include <CLI/CLI.hpp>
 #include <arpa/inet.h>
-#include <poll.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -345,23 +344,9 @@ class Simulator {
     return "";
   }
 
-  // handleTimeout over the main LCM and every drone bus: waits up to timeout_ms for a message on
-  // any, then handles one on each that has one. > 0 when something was handled, 0 on timeout,
-  // < 0 when polling or LCM failed.
-  int handle_timeout(int timeout_ms) {
-    if (buses_.size() <= 1) return lcm_->handleTimeout(timeout_ms);
-    std::vector<pollfd> fds;
-    for (lcm::LCM* b : buses_) fds.push_back(pollfd{b->getFileno(), POLLIN, 0});
-    const int r = poll(fds.data(), fds.size(), timeout_ms);
-    if (r <= 0) return r;
-    int handled = 0;
-    for (size_t i = 0; i < fds.size(); ++i) {
-      if (!(fds[i].revents & POLLIN)) continue;
-      if (buses_[i]->handle() < 0) return -1;
-      ++handled;
-    }
-    return handled;
-  }
+  // handleTimeout over the main LCM and every drone bus (fact::app::handle_any): > 0 when
+  // something was handled, 0 on timeout, < 0 when polling or LCM failed.
+  int handle_timeout(int timeout_ms) { return fact::app::handle_any(buses_, int64_t{timeout_ms} * 1000); }
 
   // The template with "{id}" replaced by the id and "{B+id}" (B an integer) by B + id, so each drone
   // can have its own group and port: Linux hands a udpm socket bound to a port the datagrams of
