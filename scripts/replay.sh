@@ -16,23 +16,25 @@
 # takeoff round 0 → spin round 0 → move round 1 → … → done round 2; waits are not decisions).
 # The frames are not in the log (they stay on the per-drone camera groups), so the fresh planner's
 # obstacle map is empty: its move targets may differ by the obstacle push-out, its decisions do not.
-# The planners are started with the run's seed, spin rate and round limit from run-params.txt
-# beside the log (written by run-sim.sh), or from the flags.
+# The planners are started with the run's seed, spin rate and round limit, and the solvers with its
+# range noise model, from run-params.txt beside the log (written by run-sim.sh), or from the flags;
+# a log without noise_quadratic there ran with the solver's default, and so does its replay.
 #
 # Flags: --out DIR (default: LOG's folder /replay), --speed X (lcm-logplayer speed, default 1),
 # --drones IDS (comma separated; default: from run-params.txt, else every drone with a result in
-# the log), --seed S, --spin-rate R, --max-rounds K (override run-params.txt), --no-build.
+# the log), --seed S, --spin-rate R, --max-rounds K, --noise-quadratic Q (override run-params.txt),
+# --no-build.
 # Exit codes: 0 the replay matches; 1 it differs (the table says what); 2 bad input (unreadable
 # log, no result in it, a drone id without a result, bad flags); 125 no private namespace.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 die() { echo "replay: $*" >&2; exit 2; }
-[ "$#" -ge 1 ] || die "usage: scripts/replay.sh LOG [--out DIR] [--speed X] [--drones IDS] [--seed S] [--spin-rate R] [--max-rounds K] [--no-build]"
-case "$1" in -h|--help) sed -n '2,29p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;; esac
+[ "$#" -ge 1 ] || die "usage: scripts/replay.sh LOG [--out DIR] [--speed X] [--drones IDS] [--seed S] [--spin-rate R] [--max-rounds K] [--noise-quadratic Q] [--no-build]"
+case "$1" in -h|--help) sed -n '2,28p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;; esac
 log=$1
 shift
-out="" speed=1 drones="" seed="" spin_rate="" max_rounds="" build=1
+out="" speed=1 drones="" seed="" spin_rate="" max_rounds="" noise_quadratic="" build=1
 while [ "$#" -gt 0 ]; do
   case "$1" in
     --out) [ "$#" -ge 2 ] || die "--out needs a value"; out=$2; shift 2 ;;
@@ -41,6 +43,7 @@ while [ "$#" -gt 0 ]; do
     --seed) [ "$#" -ge 2 ] || die "--seed needs a value"; seed=$2; shift 2 ;;
     --spin-rate) [ "$#" -ge 2 ] || die "--spin-rate needs a value"; spin_rate=$2; shift 2 ;;
     --max-rounds) [ "$#" -ge 2 ] || die "--max-rounds needs a value"; max_rounds=$2; shift 2 ;;
+    --noise-quadratic) [ "$#" -ge 2 ] || die "--noise-quadratic needs a value"; noise_quadratic=$2; shift 2 ;;
     --no-build) build=0; shift ;;
     *) die "unknown flag '$1'" ;;
   esac
@@ -60,9 +63,13 @@ spin_rate=${spin_rate:-$(param spin_rate)}
 spin_rate=${spin_rate:-1.2}
 max_rounds=${max_rounds:-$(param max_rounds)}
 max_rounds=${max_rounds:-8}
+noise_quadratic=${noise_quadratic:-$(param noise_quadratic)}
 [[ "$seed" =~ ^[0-9]+$ ]] || die "--seed: expected a non-negative integer, got '$seed'"
 [[ "$max_rounds" =~ ^[0-9]+$ ]] || die "--max-rounds: expected a positive integer, got '$max_rounds'"
 [[ "$spin_rate" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--spin-rate: expected a number, got '$spin_rate'"
+[ -z "$noise_quadratic" ] || { [[ "$noise_quadratic" =~ ^[0-9]+([.][0-9]+)?$ ]] &&
+  awk -v v="$noise_quadratic" 'BEGIN { exit !(v > 0) }'; } ||
+  die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 [ -z "$drones" ] || [[ "$drones" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--drones: expected ids like 0,1,2, got '$drones'"
 
 build_dir="${BUILD_DIR:-$here/build}"
@@ -85,7 +92,8 @@ if [ -z "${FACT_REPLAY_INNER:-}" ]; then
   [ -n "$drones" ] || drones=$(echo "$check" | awk '$1 ~ /^[0-9]+$/ { printf "%s%s", sep, $1; sep = "," }')
   rc=0
   FACT_REPLAY_INNER=1 BUILD_DIR="$build_dir" "$here/scripts/netns-run.sh" bash "${BASH_SOURCE[0]}" "$log" --out "$out" \
-    --speed "$speed" --drones "$drones" --seed "$seed" --spin-rate "$spin_rate" --max-rounds "$max_rounds" --no-build || rc=$?
+    --speed "$speed" --drones "$drones" --seed "$seed" --spin-rate "$spin_rate" --max-rounds "$max_rounds" \
+    ${noise_quadratic:+--noise-quadratic "$noise_quadratic"} --no-build || rc=$?
   exit "$rc"
 fi
 
@@ -108,7 +116,8 @@ lcm-logger --lcm-url="$URL" --quiet -c '^(FACT_RESULT_[0-9]+|FACT_SETPOINT_[0-9]
 logger=$!
 for id in ${drones//,/ }; do
   c=(--drone-id "$id" --lcm-url "$URL" --sim-clock)
-  "$B/apps/fact-solver" "${c[@]}" >"$out/logs/fact-solver-$id.log" 2>&1 &
+  "$B/apps/fact-solver" "${c[@]}" ${noise_quadratic:+--noise-quadratic "$noise_quadratic"} \
+    >"$out/logs/fact-solver-$id.log" 2>&1 &
   pids+=("$!")
   "$B/apps/fact_planner/fact-planner" "${c[@]}" --seed "$((seed * 100 + id))" --spin-rate "$spin_rate" \
     --max-rounds "$max_rounds" >"$out/logs/fact-planner-$id.log" 2>&1 &

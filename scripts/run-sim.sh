@@ -9,7 +9,8 @@
 #   scripts/run-sim.sh --drones 3 --world apps/fact_sim/worlds/small.json --fast --out /tmp/r
 #
 # Flags (see --help): --drones N, --world FILE, --seed S, --realtime | --fast, --out DIR,
-# --max-sim-time S, --resolution WxH, --camera-rate HZ, --shared-namespace, --no-build, --quiet.
+# --max-sim-time S, --resolution WxH, --camera-rate HZ, --noise-quadratic Q, --shared-namespace,
+# --no-build, --quiet.
 # Buses, as on real drones: each drone's apps talk on the drone's own bus (a multicast group and
 # port per drone); only the gossip crosses between drones, on the swarm bus, which also carries the
 # simulator's truth. Writes to --out: run.lcm (LCM log of every bus, merged: odometry, detections,
@@ -48,6 +49,9 @@ Flags:
   --position-bound M
   --spin-rate RAD/S   the planners' spin rate (default 1.4)
   --max-rounds K      a planner holds, not certified, after K spins (default 8)
+  --noise-quadratic Q the solvers' range sigma per m² of range (1/m; default: from the simulated
+                      camera, 1.2 x its per-pixel depth sigma z²·0.08 px/(fx·0.05 m): 0.005 at
+                      640x480 (fx 387), 0.009 at 424x240 (fx 213))
   --shared-namespace  all drones in one private namespace (what runs without root)
   --no-build          use the binaries in \$BUILD_DIR (default build/) as they are
   --quiet             no live event lines (the table and the verdict are still printed)
@@ -58,7 +62,7 @@ EOF
 # ---------------------------------------------------------------- flags
 drones="" world="$here/apps/fact_sim/worlds/default.json" seed=1 mode=realtime fast_rate=4
 out="" max_sim=150 resolution=640x480 camera_rate=10 yaw_bound=0.05 position_bound=0.20
-shared=0 build=1 quiet=0 spin_rate=1.4 max_rounds=8
+shared=0 build=1 quiet=0 spin_rate=1.4 max_rounds=8 noise_quadratic=""
 die_usage() { echo "run-sim: $*" >&2; echo "run-sim: see --help" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] && [ -n "$2" ] || die_usage "$1 needs a value"; }
 while [ "$#" -gt 0 ]; do
@@ -78,6 +82,7 @@ while [ "$#" -gt 0 ]; do
     --position-bound) need_value "$@"; position_bound=$2; shift 2 ;;
     --spin-rate) need_value "$@"; spin_rate=$2; shift 2 ;;
     --max-rounds) need_value "$@"; max_rounds=$2; shift 2 ;;
+    --noise-quadratic) need_value "$@"; noise_quadratic=$2; shift 2 ;;
     --shared-namespace) shared=1; shift ;;
     --no-build) build=0; shift ;;
     --quiet) quiet=1; shift ;;
@@ -96,6 +101,16 @@ for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_
     die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
 done
 case "$resolution" in 640x480|424x240) ;; *) die_usage "--resolution: expected 640x480 or 424x240, got '$resolution'" ;; esac
+# The solvers' range noise model matches the simulated stereo camera (fact/camera.h: depth sigma
+# z²·disparity_rms/(fx·baseline) per pixel). The detector's range, the mean of the nearest 20 % of
+# the box's depths, is off by 0.8 of that sigma (rms, mostly a bias toward the camera), so 1.2 of it
+# bounds the error with a margin; the solvers' own default (0.008, for an uncalibrated camera)
+# would throw away half the evidence and cost a round on half the runs (BENCHMARKS.md, session 9).
+if [ -z "$noise_quadratic" ]; then
+  case "$resolution" in 640x480) noise_quadratic=0.005 ;; 424x240) noise_quadratic=0.009 ;; esac
+fi
+is_num "$noise_quadratic" && awk -v v="$noise_quadratic" 'BEGIN { exit !(v > 0) }' ||
+  die_usage "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 [ -r "$world" ] || die_usage "--world: cannot read '$world'"
 world="$(cd "$(dirname "$world")" && pwd)/$(basename "$world")"
 
@@ -123,7 +138,8 @@ if [ -z "${FACT_RUN_SIM_INNER:-}" ]; then
   done
   args=(--world "$world" --seed "$seed" --fast-rate "$fast_rate" --out "$out" --max-sim-time "$max_sim"
         --resolution "$resolution" --camera-rate "$camera_rate" --yaw-bound "$yaw_bound"
-        --position-bound "$position_bound" --spin-rate "$spin_rate" --max-rounds "$max_rounds" --no-build)
+        --position-bound "$position_bound" --spin-rate "$spin_rate" --max-rounds "$max_rounds"
+        --noise-quadratic "$noise_quadratic" --no-build)
   [ -n "$drones" ] && args+=(--drones "$drones")
   [ "$mode" = fast ] && args+=(--fast)
   [ "$quiet" = 1 ] && args+=(--quiet)
@@ -268,7 +284,8 @@ start() {
 }
 
 # What a replay needs to start the same planners (scripts/replay.sh reads it): key=value lines.
-printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\n' "${ids// /,}" "$seed" "$spin_rate" "$max_rounds" >"$out/run-params.txt"
+printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\nnoise_quadratic=%s\n' "${ids// /,}" "$seed" "$spin_rate" "$max_rounds" \
+  "$noise_quadratic" >"$out/run-params.txt"
 
 # One recorder per bus (an LCM URL is one group), merged into run.lcm at the end. They run at a
 # higher priority (where allowed), so that a loaded machine does not make them drop messages from
@@ -286,7 +303,7 @@ for id in $ids; do
   start "fact-vio-relay-$id" "$id" "$bin_vio" "${c[@]}"
   start "fact-detector-$id" "$id" "$bin_det" "${c[@]}" --frames-url "$(fill_url "$FRAMES" "$id")"
   start "fact-gossip-$id" "$id" "$bin_gos" "${c[@]}" --swarm-url "$BUS" --insecure --min-members "$n" --roster "${ids// /,}"
-  start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}"
+  start "fact-solver-$id" "$id" "$bin_sol" "${c[@]}" --noise-quadratic "$noise_quadratic"
   start "fact-planner-$id" "$id" "$bin_pla" "${c[@]}" --frames-url "$(fill_url "$FRAMES" "$id")" --seed "$((seed * 100 + id))" \
     --spin-rate "$spin_rate" --max-rounds "$max_rounds"
   start "fact-fc-bridge-$id" "$id" "$bin_fcb" "${c[@]}" --udp "$((BRIDGE_BASE + id)):$sim_addr:$((MAV_BASE + id))" --arm --offboard
