@@ -5,7 +5,9 @@
 #   - an app killed during the run: 1, naming the app;
 #   - its internal FACT_RUN_SIM_INNER marker set by hand outside a private namespace: 125, and no
 #     app is started (multicast would otherwise reach the machine's interfaces);
-#   - a seed with a leading zero is decimal ("08"), not a bad octal number.
+#   - a seed with a leading zero is decimal ("08"), not a bad octal number;
+#   - the solvers run with the range noise model of the simulated camera (0.005/m at 640x480),
+#     recorded in run-params.txt for replay.sh; a bad --noise-quadratic is refused (2), naming it.
 #
 #   test/test_run_sim_exit_codes.sh REPO BUILD_DIR OUT_DIR
 #
@@ -39,6 +41,16 @@ grep -q '"status": "no_result"' "$OUT/short/report.json" || fail "report.json do
 grep -q '"certified": false' "$OUT/short/report.json" || fail "report.json does not say certified false"
 grep -q "^seed=8$" "$OUT/short/run-params.txt" || fail "--seed 08 was not read as 8: $(cat "$OUT/short/run-params.txt")"
 grep -q "reached --max-sim-time" "$OUT/short.out" || fail "the 3 s run does not say it reached --max-sim-time"
+grep -q "^noise_quadratic=0.005$" "$OUT/short/run-params.txt" ||
+  fail "run-params.txt does not record the camera's noise model 0.005: $(cat "$OUT/short/run-params.txt")"
+for id in 0 1; do
+  grep -q "0.005\*d^2" "$OUT/short/logs/fact-solver-$id.log" ||
+    fail "fact-solver-$id does not run with the camera's range model: $(head -n 5 "$OUT/short/logs/fact-solver-$id.log")"
+done
+rc=0
+run_sim badnoise --noise-quadratic 0 || rc=$?
+[ "$rc" -eq 2 ] || { cat "$OUT/badnoise.out"; fail "--noise-quadratic 0 exited $rc, expected 2"; }
+grep -q "noise-quadratic: expected a number > 0, got '0'" "$OUT/badnoise.out" || fail "the refusal does not name --noise-quadratic"
 
 # 2. An app killed during the run: 1, naming it. The solver of drone 1 is found by its log file,
 # which only that process holds open.
@@ -70,4 +82,4 @@ if awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") found = 1 } END { exit !
   grep -q "not a private network namespace" "$OUT/marker.out" || fail "the refusal does not say why"
   [ ! -e "$OUT/marker/logs" ] || fail "apps were started outside a private namespace"
 fi
-echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125, seed 08 read as 8"
+echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125, seed 08 read as 8, camera noise model used"

@@ -233,8 +233,11 @@ int main(int argc, char** argv) {
   if (!fact::app::start_clock(lcm, options.common, log)) return 1;
   Solver solver(lcm, options, estimate_options);
   lcm.subscribe(options.rounds_channel, &Solver::on_rounds, &solver);
+  const fact::NoiseModel& noise = estimate_options.noise;
+  std::ostringstream model;  // the range model, so a log says which sensor calibration it ran with
+  model << "range sigma^2 = " << noise.floor << "^2 + (" << noise.linear << "*d + " << noise.quadratic << "*d^2)^2 m^2";
   log.event("listening on " + options.rounds_channel + ", publishing on " + options.result_channel + " (mode " +
-            options.estimator.mode + ")");
+            options.estimator.mode + ", " + model.str() + ")");
   const int code = fact::app::run_loop(lcm, 100, [&](int64_t now) { solver.every(now); });
   solver.final_status();
   log.event(code == 0 ? "stopped" : "stopped: LCM failed");
