@@ -521,6 +521,7 @@ TEST(SdpDuality, CertifiedResultsHaveConsistentBoundsForEveryMethod) {
   const std::vector<Instance> instances = {
       {"plain noisy N=4", noisy_plain_cost(4, 1), 2},
       {"plain noisy N=7", noisy_plain_cost(7, 2), 2},
+      {"plain noisy N=8 (automatic: interior point handed off to Newton)", noisy_plain_cost(8, 6), 2},
       {"complex noisy N=6", fact::sdp::complex_form(noisy_plain_cost(6, 3)), 2},
       {"random symmetric n=12 d=2", random_symmetric(12, 31), 2},
       {"random psd n=9 d=1", random_psd(9, 32), 1},

@@ -123,7 +123,8 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
 
 }  // namespace
 
-InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options) {
+InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
+                                          const InteriorPointOutcome* resume) {
   const int n = static_cast<int>(C.rows());
   const auto entries = constraint_entries(n, d);
   const int m = static_cast<int>(entries.size());
@@ -135,6 +136,10 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   const bool exact_steps = n <= kExactStepMaxSize;  // L⁻¹ of X is only needed by the exact step length
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
   Eigen::VectorXd y = -2.0 * b;                          // dual, m
+  if (resume) {
+    X = resume->X;
+    for (int p = 0; p < m; ++p) y[p] = resume->lambda(entries[p].u, entries[p].v % d);
+  }
   Eigen::MatrixXd lambda(n, d);                          // Aᵀ(y) as stacked d × d blocks, n × d
   lambda_from_y(y, entries, d, lambda);
   Eigen::MatrixXd Z(n, n);                               // dual slack C − Aᵀ(y), n × n
@@ -148,8 +153,9 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   Eigen::VectorXd best_y = y;  // m
   double halved_gap = best_gap;
   int stalled = 0;  // iterations since the gap last halved
-  for (int it = 0; it < options.max_ipm_iterations; ++it) {
-    out.iterations = it + 1;
+  const int done = resume ? resume->iterations : 0;  // iterations the resumed run already took
+  for (int it = done; it < options.max_ipm_iterations; ++it) {
+    out.iterations = it + 1 - done;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
     const double gap = X.cwiseProduct(Z).sum();
     const double rel_gap = gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
@@ -162,6 +168,11 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     }
     if (rel_gap < 0.1 * options.gap_tol) {
       out.converged = true;
+      break;
+    }
+    if (rel_gap < handoff_gap && !grew) {
+      out.handed_off = true;
+      out.reason = "handed off at relative gap " + std::to_string(rel_gap);
       break;
     }
     if (gap < 0.5 * halved_gap) {

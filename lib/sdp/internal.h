@@ -56,12 +56,17 @@ struct InteriorPointOutcome {
   Eigen::MatrixXd X;        // n × n primal
   Eigen::MatrixXd lambda;   // n × d dual multipliers, Λ_ii stacked
   int iterations = 0;
-  bool converged = false;
+  bool converged = false;   // relative gap below 0.1·gap_tol
+  bool handed_off = false;  // stopped at the handoff gap, before convergence (X, lambda resume it)
   std::string reason;       // why it stopped when not converged
 };
 
-// Primal–dual path following with the HKM direction and a Mehrotra corrector.
-InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options);
+// Primal–dual path following with the HKM direction and a Mehrotra corrector. It stops once
+// the relative gap is below handoff_gap (> 0: handed_off is set), so a caller can try a cheaper
+// finish; `resume` (an outcome that handed off) continues from its X and Λ, which are strictly
+// feasible, instead of X = I.
+InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
+                                          double handoff_gap = 0, const InteriorPointOutcome* resume = nullptr);
 
 // The factor of largest rank r ≤ n with X = Y Yᵀ (eigenvalues below tol·max dropped).
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);

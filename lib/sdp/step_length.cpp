@@ -201,7 +201,7 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
   tridiagonalize(B_, diagonal_, subdiagonal_, work_);
   if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
   double lo = -1.01 * gershgorin_radius(diagonal_, subdiagonal_), hi = -tau;  // λ_min ∈ [lo, hi)
-  while (hi - lo > -1e-4 * hi) {
+  while (hi - lo > -(tau >= 1.0 ? 1e-2 : 1e-3) * hi) {
     const double mid = -std::sqrt(lo * hi);
     (eigenvalues_below(diagonal_, subdiagonal_, mid) > 0 ? hi : lo) = mid;
   }

@@ -1,0 +1,76 @@
+// The interior point's handoff and resume (lib/sdp/internal.h): in automatic mode the solver
+// stops the interior point at a relative gap of 1e-5, tries a short Newton polish, and resumes
+// the interior point from where it stopped when the polish does not certify. These tests check
+// that the stop happens below the asked gap and that a resumed run ends where one uninterrupted
+// run ends, on the scaled problem (‖C‖_F = 1) the solver passes in.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fact/rotation_cost.h"
+#include "fact/simgen.h"
+#include "internal.h"
+
+namespace {
+
+using fact::sdp::Options;
+using fact::sdp::detail::InteriorPointOutcome;
+using fact::sdp::detail::solve_interior_point;
+
+// The paper's plain cost of a noisy swarm of `drones` (2N × 2N), scaled to ‖C‖_F = 1.
+Eigen::MatrixXd scaled_plain_cost(int drones, std::uint64_t seed) {
+  fact::SyntheticOptions o;
+  o.drones = drones;
+  o.rounds = drones + 2;
+  o.noise = 0.05;
+  o.seed = seed;
+  const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+  return C / C.norm();
+}
+
+// ⟨C, X⟩ − tr Λ = ⟨X, C − blkdiag(Λ)⟩: the duality gap of a feasible iterate.
+double gap_of(const Eigen::MatrixXd& C, const InteriorPointOutcome& ip) {
+  const double primal = C.cwiseProduct(ip.X).sum();
+  double dual = 0;
+  for (Eigen::Index i = 0; i < ip.lambda.rows(); i += 2) dual += ip.lambda(i, 0) + ip.lambda(i + 1, 1);
+  return (primal - dual) / std::max({1e-4, std::abs(primal), std::abs(dual)});
+}
+
+void expect_feasible(const InteriorPointOutcome& ip) {
+  for (Eigen::Index i = 0; i < ip.X.rows(); i += 2)
+    EXPECT_LT((ip.X.block(i, i, 2, 2) - Eigen::Matrix2d::Identity()).norm(), 1e-12) << "block " << i / 2;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(ip.X).eigenvalues().minCoeff(), -1e-12);
+}
+
+TEST(SdpInteriorPoint, HandsOffBelowTheGapAndResumesToWhereOneRunEnds) {
+  for (int drones : {4, 8}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C = scaled_plain_cost(drones, 11 + drones);
+    const Options o;
+    const InteriorPointOutcome whole = solve_interior_point(C, 2, o);
+    const InteriorPointOutcome early = solve_interior_point(C, 2, o, 1e-5);
+    ASSERT_TRUE(early.handed_off) << early.reason;
+    EXPECT_FALSE(early.converged);
+    EXPECT_LT(gap_of(C, early), 1e-5);
+    EXPECT_GT(gap_of(C, early), 0.1 * o.gap_tol);  // it stopped before converging
+    EXPECT_LT(early.iterations, whole.iterations);
+    expect_feasible(early);
+
+    const InteriorPointOutcome rest = solve_interior_point(C, 2, o, 0.0, &early);
+    EXPECT_FALSE(rest.handed_off);
+    expect_feasible(rest);
+    EXPECT_LT(gap_of(C, rest), 1e-7) << rest.reason;
+    // The same optimum as one uninterrupted run, within the gaps both reached.
+    EXPECT_NEAR(C.cwiseProduct(rest.X).sum(), C.cwiseProduct(whole.X).sum(), 1e-7);
+    EXPECT_LE(early.iterations + rest.iterations, whole.iterations + 3);
+  }
+}
+
+TEST(SdpInteriorPoint, NoHandoffGapNeverHandsOff) {
+  const Eigen::MatrixXd C = scaled_plain_cost(6, 5);
+  const InteriorPointOutcome ip = solve_interior_point(C, 2, Options{});
+  EXPECT_FALSE(ip.handed_off);
+  EXPECT_LT(gap_of(C, ip), 1e-7) << ip.reason;
+}
+
+}  // namespace
