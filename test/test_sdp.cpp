@@ -18,6 +18,7 @@
 
 #include "fact/rotation_cost.h"
 #include "fact/sdp.h"
+#include "sdp_test_costs.h"
 #include "sdpa_sparse_reader.h"
 
 namespace fact::sdp {
@@ -481,14 +482,7 @@ TEST(SdpRounding, RotationAnglesAreInMinusPiToPi) {
 // ---------------------------------------------------------------------------------------
 // Determinism and duality.
 
-Eigen::MatrixXd noisy_plain_cost(int drones, std::uint64_t seed) {
-  fact::SyntheticOptions o;
-  o.drones = drones;
-  o.rounds = drones + 2;
-  o.noise = 0.05;
-  o.seed = seed;
-  return fact::paper_cost(fact::make_synthetic_rounds(o).sums);
-}
+using fact::test::noisy_plain_cost;
 
 TEST(SdpDeterminism, RepeatedSolvesAreBitIdentical) {
   const std::vector<Eigen::MatrixXd> costs = {noisy_plain_cost(6, 4), fact::sdp::complex_form(noisy_plain_cost(5, 9)),

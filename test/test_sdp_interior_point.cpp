@@ -7,9 +7,8 @@
 
 #include <cmath>
 
-#include "fact/rotation_cost.h"
-#include "fact/simgen.h"
 #include "internal.h"
+#include "sdp_test_costs.h"
 
 namespace {
 
@@ -19,12 +18,7 @@ using fact::sdp::detail::solve_interior_point;
 
 // The paper's plain cost of a noisy swarm of `drones` (2N × 2N), scaled to ‖C‖_F = 1.
 Eigen::MatrixXd scaled_plain_cost(int drones, std::uint64_t seed) {
-  fact::SyntheticOptions o;
-  o.drones = drones;
-  o.rounds = drones + 2;
-  o.noise = 0.05;
-  o.seed = seed;
-  const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+  const Eigen::MatrixXd C = fact::test::noisy_plain_cost(drones, seed);
   return C / C.norm();
 }
 
