@@ -21,7 +21,8 @@
 # ttl=1 on the swarm's network, so only the gossip crosses between drones; --out DIR (logs; default build/run-drone-<id>),
 # --arm (let fact-fc-bridge arm and switch to OFFBOARD; default: the pilot does), --sim-clock
 # (apps follow fact-sim's clock: simulated hardware), --preflight-timeout S (default 10),
-# --check-only (run the checklist and stop), --no-build.
+# --check-only (run the checklist and stop), --no-build, --noise-quadratic Q (the solver's range
+# σ per m² of range, 1/m: measure it for this camera; default: fact-solver's 0.008).
 #
 # Pre-flight: the relay, the detector and the bridge start first; then fact-preflight checks the
 # swarm key, the flight controller's heartbeat (through the bridge), camera frames and VIO odometry.
@@ -35,10 +36,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 die() { echo "run-drone: $*" >&2; echo "run-drone: see --help" >&2; exit 2; }
 id="" camera="" vio="" fc="" key="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
-check_only=0 build=1 preflight_timeout=10 swarm_url=""
+check_only=0 build=1 preflight_timeout=10 swarm_url="" noise_quadratic=""
 while [ "$#" -gt 0 ]; do
   case "$1" in
-    -h|--help) sed -n '2,32p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,33p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --id) [ "$#" -ge 2 ] || die "--id needs a value"; id=$2; shift 2 ;;
     --camera) [ "$#" -ge 2 ] || die "--camera needs a value"; camera=$2; shift 2 ;;
     --vio) [ "$#" -ge 2 ] || die "--vio needs a value"; vio=$2; shift 2 ;;
@@ -54,6 +55,7 @@ while [ "$#" -gt 0 ]; do
     --preflight-timeout) [ "$#" -ge 2 ] || die "--preflight-timeout needs a value"; preflight_timeout=$2; shift 2 ;;
     --check-only) check_only=1; shift ;;
     --no-build) build=0; shift ;;
+    --noise-quadratic) [ "$#" -ge 2 ] || die "--noise-quadratic needs a value"; noise_quadratic=$2; shift 2 ;;
     *) die "unknown flag '$1'" ;;
   esac
 done
@@ -65,6 +67,8 @@ done
 [ "$insecure" = 0 ] || [ -z "$key" ] || die "--key and --insecure exclude each other"
 [ -z "$roster" ] || [[ "$roster" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
 [[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--preflight-timeout: expected seconds, got '$preflight_timeout'"
+[ -z "$noise_quadratic" ] || { [[ "$noise_quadratic" =~ ^[0-9]+([.][0-9]+)?$ ]] && awk -v v="$noise_quadratic" 'BEGIN { exit !(v > 0) }'; } ||
+  die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 
 # Sources → app flags.
 det_src=() pre_cam=() pla_src=() vio_src=() fc_link=()
@@ -151,7 +155,7 @@ gossip_flags=("${keyflag[@]}")
 [ -n "$roster" ] && gossip_flags+=(--roster "$roster")
 [ -n "$swarm_url" ] && gossip_flags+=(--swarm-url "$swarm_url")
 start fact-gossip "$B/apps/fact-gossip$x" "${common[@]}" "${gossip_flags[@]}"
-start fact-solver "$B/apps/fact-solver$x" "${common[@]}"
+start fact-solver "$B/apps/fact-solver$x" "${common[@]}" ${noise_quadratic:+--noise-quadratic "$noise_quadratic"}
 start fact-planner "$B/apps/fact_planner/fact-planner$x" "${common[@]}" "${pla_src[@]}"
 echo "== drone $id flying its initialization; Ctrl-C stops every app. Events:"
 (cd "$out/logs" && exec tail --pid=$$ -q -n 0 -F fact-*.log 2>/dev/null |

@@ -56,4 +56,6 @@ grep -q "\[FAIL\] camera" "$WORK/out" || fail "no camera frames did not fail the
 grep -q "must not fly" "$WORK/out" || fail "a failed checklist did not say the drone must not fly"
 check 2 --fc bogus --key "$WORK/swarm.key"
 grep -q "\-\-fc: expected" "$WORK/out" || fail "a bad --fc was not named"
+check 2 --fc udp:14545:127.0.0.1:14600 --key "$WORK/swarm.key" --noise-quadratic -0.5
+grep -q "\-\-noise-quadratic: expected a number > 0, got '-0.5'" "$WORK/out" || fail "a bad --noise-quadratic was not named"
 echo "test_run_drone: the checklist passes on simulated hardware and names each missing item"
