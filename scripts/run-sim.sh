@@ -95,11 +95,6 @@ is_num() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]]; }
   die_usage "--drones: expected an integer 2..32, got '$drones'"
 is_uint "$seed" && [ "${#seed}" -le 9 ] || die_usage "--seed: expected an integer 0..999999999, got '$seed'"
 seed=$((10#$seed))  # decimal even with leading zeros ("08" is not octal here)
-for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_rate" \
-            "yaw-bound:$yaw_bound" "position-bound:$position_bound" "spin-rate:$spin_rate" "max-rounds:$max_rounds"; do
-  is_num "${pair#*:}" && awk -v v="${pair#*:}" 'BEGIN { exit !(v > 0) }' ||
-    die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
-done
 case "$resolution" in 640x480|424x240) ;; *) die_usage "--resolution: expected 640x480 or 424x240, got '$resolution'" ;; esac
 # The solvers' range noise model matches the simulated stereo camera (fact/camera.h: depth sigma
 # z²·disparity_rms/(fx·baseline) per pixel). The detector's range, the mean of the nearest 20 % of
@@ -109,8 +104,12 @@ case "$resolution" in 640x480|424x240) ;; *) die_usage "--resolution: expected 6
 if [ -z "$noise_quadratic" ]; then
   case "$resolution" in 640x480) noise_quadratic=0.005 ;; 424x240) noise_quadratic=0.009 ;; esac
 fi
-is_num "$noise_quadratic" && awk -v v="$noise_quadratic" 'BEGIN { exit !(v > 0) }' ||
-  die_usage "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
+for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_rate" \
+            "yaw-bound:$yaw_bound" "position-bound:$position_bound" "spin-rate:$spin_rate" "max-rounds:$max_rounds" \
+            "noise-quadratic:$noise_quadratic"; do
+  is_num "${pair#*:}" && awk -v v="${pair#*:}" 'BEGIN { exit !(v > 0) }' ||
+    die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
+done
 [ -r "$world" ] || die_usage "--world: cannot read '$world'"
 world="$(cd "$(dirname "$world")" && pwd)/$(basename "$world")"
 
