@@ -21,8 +21,7 @@ namespace {
 struct NewtonWorkspace {
   NewtonWorkspace(Eigen::Index n, int d, Eigen::Index r, int blocks, int t)
       : CY(n, r), lambda(n, d), S(n, n), SY(n, r), basis(n, r * t), Bc(n, t), SB(n, blocks * t), g(blocks * t),
-        H(blocks * t, blocks * t), shifted(blocks * t, blocks * t), ldlt(blocks * t), eta(blocks * t), next(n, r),
-        next_CY(n, r), Q(r, r) {}
+        H(blocks * t, blocks * t), llt(blocks * t), eta(blocks * t), next(n, r), next_CY(n, r), Q(r, r) {}
   Eigen::MatrixXd CY;       // C Y for the current Y, n × r
   Eigen::MatrixXd lambda;   // Λ(Y) = SymBlockDiag(C Y Yᵀ), d × d blocks stacked, n × d
   Eigen::MatrixXd S;        // C − blkdiag(Λ), n × n
@@ -32,8 +31,7 @@ struct NewtonWorkspace {
   Eigen::MatrixXd SB;       // S times the block-diagonal matrix of the Bc blocks, n × N·t
   Eigen::VectorXd g;        // gradient coefficients, N·t
   Eigen::MatrixXd H;        // Hessian in the tangent bases, N·t × N·t
-  Eigen::MatrixXd shifted;  // H + μI, N·t × N·t
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+  Eigen::LLT<Eigen::MatrixXd> llt;  // factor of H + μI (its own N·t × N·t copy; blocked, unlike LDLT)
   Eigen::VectorXd eta;      // Newton step coefficients, N·t
   Eigen::MatrixXd next;     // trial factor, n × r
   Eigen::MatrixXd next_CY;  // C · next, n × r
@@ -157,11 +155,11 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
       hessian<2>(r, blocks, t, ws);
     bool stepped = false;
     for (int tries = 0; tries < 12 && !stepped; ++tries, mu *= 10) {
-      ws.shifted = ws.H;
-      ws.shifted.diagonal().array() += mu;
-      ws.ldlt.compute(ws.shifted);
-      if (ws.ldlt.info() != Eigen::Success || !(ws.ldlt.vectorD().array() > 0).all()) continue;
-      ws.eta = ws.ldlt.solve(-ws.g);
+      ws.H.diagonal().array() += mu;  // shifted in place: the factorisation copies H + μI
+      ws.llt.compute(ws.H);
+      ws.H.diagonal().array() -= mu;
+      if (ws.llt.info() != Eigen::Success) continue;  // H + μI not positive definite: more damping
+      ws.eta = ws.llt.solve(-ws.g);
       const double f_next = trial_step(C, Y, d, blocks, t, ws);
       if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
         Y.swap(ws.next);
