@@ -5,6 +5,8 @@
 // certified but wrong), the simulated time to the certified result, the rounds used, the yaw and
 // position errors, and the CPU time of every app of every drone. It writes one CSV row per run
 // (e2e_runs.csv), a summary per size (e2e.csv, e2e_summary.txt) and prints progress per run.
+// With --summarize it runs nothing: it merges the e2e_runs.csv of several batches (seed ranges
+// run apart, e.g. on different days) into one e2e_runs.csv and summarises them the same way.
 // scripts/bench-e2e.sh builds it, runs it and draws the PNG (bench/plots/e2e.gp).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -21,6 +23,8 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -39,6 +43,7 @@ struct Options {
   double max_sim_time = 150;
   double fast_rate = 8;
   bool keep_runs = false;  // keep every run's folder (logs, LCM log, picture)
+  std::vector<std::string> summarize;  // e2e_runs.csv files to merge instead of running
 };
 
 // The CPU of one app kind, summed over a run's drones (s), and the run's length.
@@ -139,6 +144,103 @@ Run run_one(const Options& o, int drones, int seed) {
   return r;
 }
 
+// The header of e2e_runs.csv: the run columns, then one CPU column per app.
+std::string runs_header() {
+  std::string h =
+      "drones,seed,exit,certified,correct,certified_wrong,time_to_certified_s,rounds,yaw_mae_rad,yaw_max_rad,"
+      "position_median_m,position_max_m,sim_s,wall_s";
+  for (const std::string& a : kApps) h += "," + a + "_cpu_percent";
+  return h;
+}
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream ss(line);
+  for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
+  if (!line.empty() && line.back() == ',') fields.emplace_back();
+  return fields;
+}
+
+// A whole field as a number ("nan" allowed: runs that did not certify have no time);
+// throws std::invalid_argument naming the column and the value.
+double parse_number(const std::string& field, const std::string& column) {
+  size_t used = 0;
+  double v = NAN;
+  try {
+    v = std::stod(field, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != field.size())
+    throw std::invalid_argument("column " + column + ": '" + field + "' is not a number");
+  return v;
+}
+
+int parse_count(const std::string& field, const std::string& column, int lo, int hi) {
+  const double v = parse_number(field, column);
+  if (!(v >= lo && v <= hi) || v != std::floor(v))
+    throw std::invalid_argument("column " + column + ": '" + field + "' is not an integer in " + std::to_string(lo) +
+                                ".." + std::to_string(hi));
+  return static_cast<int>(v);
+}
+
+// One e2e_runs.csv row back into a Run (CPU columns: % of a core per drone → CPU s).
+Run parse_run_row(const std::vector<std::string>& f, const std::vector<std::string>& columns) {
+  if (f.size() != columns.size())
+    throw std::invalid_argument(std::to_string(f.size()) + " fields, expected " + std::to_string(columns.size()));
+  Run r;
+  r.drones = parse_count(f[0], columns[0], 2, 32);
+  r.seed = parse_count(f[1], columns[1], 0, 1 << 30);
+  r.exit_code = parse_count(f[2], columns[2], 0, 255);
+  r.certified = parse_count(f[3], columns[3], 0, 1);
+  r.correct = parse_count(f[4], columns[4], 0, 1);
+  r.certified_wrong = parse_count(f[5], columns[5], 0, 1);
+  r.time_to_certified = parse_number(f[6], columns[6]);
+  r.rounds = parse_count(f[7], columns[7], 0, 1 << 20);
+  double* numbers[] = {&r.yaw_mae, &r.yaw_max, &r.position_median, &r.position_max, &r.sim_seconds, &r.wall_seconds};
+  for (size_t k = 0; k < 6; ++k) *numbers[k] = parse_number(f[8 + k], columns[8 + k]);
+  for (size_t k = 0; k < kApps.size(); ++k) {
+    const double pct = parse_number(f[14 + k], columns[14 + k]);
+    if (std::isfinite(pct) && r.sim_seconds > 0) r.cpu_s[kApps[k]] = pct / 100 * r.drones * r.sim_seconds;
+  }
+  if (!r.correct) r.reason = "run-sim.sh exit " + std::to_string(r.exit_code);
+  return r;
+}
+
+// Every run of the e2e_runs.csv files, in (drones, seed) order. Throws std::invalid_argument
+// naming the file, line and column on a missing file, a foreign header, a malformed row or a
+// (drones, seed) pair that two rows share.
+std::vector<Run> read_runs_files(const std::vector<std::string>& paths) {
+  const std::vector<std::string> columns = split_csv_line(runs_header());
+  std::map<std::pair<int, int>, std::string> where;  // (drones, seed) -> file:line
+  std::vector<Run> runs;
+  for (const std::string& path : paths) {
+    std::ifstream in(path);
+    if (!in) throw std::invalid_argument(path + ": cannot be read");
+    std::string line;
+    if (!std::getline(in, line) || line != runs_header())
+      throw std::invalid_argument(path + ": line 1: not an e2e_runs.csv header: '" + line + "'");
+    for (int number = 2; std::getline(in, line); ++number) {
+      if (line.empty()) continue;
+      const std::string at = path + ":" + std::to_string(number);
+      Run r;
+      try {
+        r = parse_run_row(split_csv_line(line), columns);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(at + ": " + e.what());
+      }
+      const auto [it, fresh] = where.emplace(std::make_pair(r.drones, r.seed), at);
+      if (!fresh)
+        throw std::invalid_argument(at + ": N=" + std::to_string(r.drones) + " seed " + std::to_string(r.seed) +
+                                    " is already in " + it->second);
+      runs.push_back(r);
+    }
+  }
+  std::sort(runs.begin(), runs.end(),
+            [](const Run& a, const Run& b) { return std::tie(a.drones, a.seed) < std::tie(b.drones, b.seed); });
+  return runs;
+}
+
 double median(std::vector<double> v) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
   if (v.empty()) return NAN;
@@ -179,6 +281,73 @@ double drone_cpu_percent(const Run& r) {
   return 100 * s / (r.drones * r.sim_seconds);
 }
 
+// e2e.csv and e2e_summary.txt in out_dir from the runs of each size; the summary is also printed.
+void write_summaries(const std::string& out_dir, const std::map<int, std::vector<Run>>& by_size,
+                     const std::string& title) {
+  std::ofstream csv(out_dir + "/e2e.csv");
+  csv << "drones,runs,success_percent,certified_wrong,time_median_s,time_p90_s,rounds_median,yaw_mae_rad,"
+         "position_median_m,cpu_per_drone_percent\n";
+  std::ostringstream summary;
+  summary << "fact-bench-e2e: " << title << "\n";
+  summary << "  N  runs  success  cert-wrong  t_cert median / p90 (sim s)  rounds  yaw MAE (rad)  pos err median (m)"
+             "  CPU/drone (% core)\n";
+  for (const auto& [n, runs] : by_size) {
+    int ok = 0, wrong = 0;
+    std::vector<double> times, rounds, yaw, pos, cpu;
+    for (const Run& r : runs) {
+      ok += r.correct;
+      wrong += r.certified_wrong;
+      if (r.correct) {
+        times.push_back(r.time_to_certified);
+        rounds.push_back(r.rounds);
+        yaw.push_back(r.yaw_mae);
+        pos.push_back(r.position_median);
+      }
+      cpu.push_back(drone_cpu_percent(r));
+    }
+    std::vector<double> sorted = times;
+    std::sort(sorted.begin(), sorted.end());
+    const double p90 = sorted.empty() ? NAN : sorted[std::min(sorted.size() - 1, sorted.size() * 9 / 10)];
+    const double success = 100.0 * ok / static_cast<double>(runs.size());
+    csv << n << ',' << runs.size() << ',' << success << ',' << wrong << ',' << median(times) << ',' << p90 << ','
+        << median(rounds) << ',' << mean(yaw) << ',' << median(pos) << ',' << mean(cpu) << '\n';
+    char line[256];
+    std::snprintf(line, sizeof line, "%3d  %4zu  %6.1f%%  %10d  %13.1f / %-13.1f  %6.1f  %13.4f  %18.3f  %18.1f\n", n,
+                  runs.size(), success, wrong, median(times), p90, median(rounds), mean(yaw), median(pos), mean(cpu));
+    summary << line;
+  }
+  std::ofstream(out_dir + "/e2e_summary.txt") << summary.str();
+  std::cout << summary.str();
+}
+
+// --summarize: reads every file before writing anything, so a bad file leaves out_dir as it was
+// (and out_dir's own e2e_runs.csv may be one of the inputs).
+int summarize(const Options& o) {
+  std::vector<Run> runs;
+  try {
+    runs = read_runs_files(o.summarize);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "fact-bench-e2e: error: --summarize: " << e.what() << "\n";
+    return 2;
+  }
+  std::map<int, std::vector<Run>> by_size;
+  for (const Run& r : runs) by_size[r.drones].push_back(r);
+  std::error_code ec;
+  fs::create_directories(o.out_dir, ec);
+  std::ofstream runs_csv(o.out_dir + "/e2e_runs.csv");
+  if (!runs_csv) {
+    std::cerr << "fact-bench-e2e: error: --out-dir: cannot write " << o.out_dir << "/e2e_runs.csv\n";
+    return 1;
+  }
+  runs_csv << runs_header() << '\n';
+  for (const Run& r : runs) write_run_row(runs_csv, r);
+  std::string title = "summary of " + std::to_string(runs.size()) + " runs from";
+  for (const std::string& f : o.summarize) title += " " + f;
+  write_summaries(o.out_dir, by_size, title);
+  std::cout << "wrote " << o.out_dir << "/e2e_runs.csv, e2e.csv, e2e_summary.txt\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -188,15 +357,23 @@ int main(int argc, char** argv) {
   cli.add_option("--drones", o.drones, "Swarm sizes (comma separated)")->delimiter(',')->capture_default_str();
   cli.add_option("--seeds", o.seeds, "Seeds per size")->capture_default_str();
   cli.add_option("--first-seed", o.first_seed, "First seed")->capture_default_str();
-  cli.add_option("--repo", o.repo, "Source tree (scripts/run-sim.sh)")->required();
-  cli.add_option("--build", o.build, "Build tree with the apps (BUILD_DIR of run-sim.sh)")->required();
+  cli.add_option("--repo", o.repo, "Source tree (scripts/run-sim.sh); required unless --summarize");
+  cli.add_option("--build", o.build, "Build tree with the apps (BUILD_DIR of run-sim.sh); required unless --summarize");
   cli.add_option("--world", o.world, "fact-world-v1 world (default: run-sim.sh's, the default world with obstacles)");
   cli.add_option("--out-dir", o.out_dir, "Where e2e_runs.csv, e2e.csv and e2e_summary.txt go")->capture_default_str();
   cli.add_option("--work-dir", o.work_dir, "Per-run folders (default <out-dir>/e2e-runs; failed runs are kept)");
   cli.add_option("--max-sim-time", o.max_sim_time, "Simulated s before a run gives up")->capture_default_str();
   cli.add_option("--fast-rate", o.fast_rate, "Cap of the simulation speed (x real time)")->capture_default_str();
   cli.add_flag("--keep-runs", o.keep_runs, "Keep every run's folder, not only the failed ones");
+  cli.add_option("--summarize", o.summarize,
+                 "Run nothing: merge these e2e_runs.csv files (batches of seeds) into <out-dir>/e2e_runs.csv\n"
+                 "and write e2e.csv and e2e_summary.txt from them");
   CLI11_PARSE(cli, argc, argv);
+  if (!o.summarize.empty()) return summarize(o);
+  if (o.repo.empty() || o.build.empty()) {
+    std::cerr << "fact-bench-e2e: error: --repo and --build are required to run (or give --summarize FILE...)\n";
+    return 2;
+  }
   for (int n : o.drones)
     if (n < 2 || n > 32) {
       std::cerr << "fact-bench-e2e: error: --drones: expected sizes 2..32, got " << n << "\n";
@@ -211,10 +388,7 @@ int main(int argc, char** argv) {
   fs::create_directories(o.work_dir);
 
   std::ofstream runs_csv(o.out_dir + "/e2e_runs.csv");
-  runs_csv << "drones,seed,exit,certified,correct,certified_wrong,time_to_certified_s,rounds,yaw_mae_rad,yaw_max_rad,"
-              "position_median_m,position_max_m,sim_s,wall_s";
-  for (const std::string& a : kApps) runs_csv << ',' << a << "_cpu_percent";
-  runs_csv << '\n';
+  runs_csv << runs_header() << '\n';
 
   std::map<int, std::vector<Run>> by_size;
   const auto t0 = std::chrono::steady_clock::now();
@@ -245,41 +419,9 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::ofstream csv(o.out_dir + "/e2e.csv");
-  csv << "drones,runs,success_percent,certified_wrong,time_median_s,time_p90_s,rounds_median,yaw_mae_rad,"
-         "position_median_m,cpu_per_drone_percent\n";
-  std::ostringstream summary;
-  summary << "fact-bench-e2e: " << o.seeds << " seeds per size from " << o.first_seed << ", world "
-          << (o.world.empty() ? "default (obstacles)" : o.world) << ", --fast\n";
-  summary << "  N  runs  success  cert-wrong  t_cert median / p90 (sim s)  rounds  yaw MAE (rad)  pos err median (m)"
-             "  CPU/drone (% core)\n";
-  for (const auto& [n, runs] : by_size) {
-    int ok = 0, wrong = 0;
-    std::vector<double> times, rounds, yaw, pos, cpu;
-    for (const Run& r : runs) {
-      ok += r.correct;
-      wrong += r.certified_wrong;
-      if (r.correct) {
-        times.push_back(r.time_to_certified);
-        rounds.push_back(r.rounds);
-        yaw.push_back(r.yaw_mae);
-        pos.push_back(r.position_median);
-      }
-      cpu.push_back(drone_cpu_percent(r));
-    }
-    std::vector<double> sorted = times;
-    std::sort(sorted.begin(), sorted.end());
-    const double p90 = sorted.empty() ? NAN : sorted[std::min(sorted.size() - 1, sorted.size() * 9 / 10)];
-    const double success = 100.0 * ok / static_cast<double>(runs.size());
-    csv << n << ',' << runs.size() << ',' << success << ',' << wrong << ',' << median(times) << ',' << p90 << ','
-        << median(rounds) << ',' << mean(yaw) << ',' << median(pos) << ',' << mean(cpu) << '\n';
-    char line[256];
-    std::snprintf(line, sizeof line, "%3d  %4zu  %6.1f%%  %10d  %13.1f / %-13.1f  %6.1f  %13.4f  %18.3f  %18.1f\n", n,
-                  runs.size(), success, wrong, median(times), p90, median(rounds), mean(yaw), median(pos), mean(cpu));
-    summary << line;
-  }
-  std::ofstream(o.out_dir + "/e2e_summary.txt") << summary.str();
-  std::cout << summary.str();
+  write_summaries(o.out_dir, by_size,
+                  std::to_string(o.seeds) + " seeds per size from " + std::to_string(o.first_seed) + ", world " +
+                      (o.world.empty() ? "default (obstacles)" : o.world) + ", --fast");
   std::cout << "wrote " << o.out_dir << "/e2e_runs.csv, e2e.csv, e2e_summary.txt\n";
   return 0;
 }
