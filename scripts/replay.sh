@@ -28,6 +28,7 @@
 # log, no result in it, a drone id without a result, bad flags); 125 no private namespace.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$here/scripts/lib/args.sh"
 
 die() { echo "replay: $*" >&2; exit 2; }
 [ "$#" -ge 1 ] || die "usage: scripts/replay.sh LOG [--out DIR] [--speed X] [--drones IDS] [--seed S] [--spin-rate R] [--max-rounds K] [--noise-quadratic Q] [--no-build]"
@@ -50,8 +51,7 @@ while [ "$#" -gt 0 ]; do
 done
 [ -r "$log" ] && [ -s "$log" ] || die "LOG: cannot read '$log'"
 log="$(cd "$(dirname "$log")" && pwd)/$(basename "$log")"
-positive() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]] && awk -v v="$1" 'BEGIN { exit !(v > 0) }'; }  # a number > 0
-positive "$speed" || die "--speed: expected a number > 0, got '$speed'"
+is_positive "$speed" || die "--speed: expected a number > 0, got '$speed'"
 
 # The run's parameters (key=value lines; only these keys are read, nothing is executed).
 params="$(dirname "$log")/run-params.txt"
@@ -67,7 +67,7 @@ noise_quadratic=${noise_quadratic:-$(param noise_quadratic)}
 [[ "$seed" =~ ^[0-9]+$ ]] || die "--seed: expected a non-negative integer, got '$seed'"
 [[ "$max_rounds" =~ ^[0-9]+$ ]] || die "--max-rounds: expected a positive integer, got '$max_rounds'"
 [[ "$spin_rate" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--spin-rate: expected a number, got '$spin_rate'"
-[ -z "$noise_quadratic" ] || positive "$noise_quadratic" ||
+[ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
   die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 [ -z "$drones" ] || [[ "$drones" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--drones: expected ids like 0,1,2, got '$drones'"
 

@@ -33,6 +33,7 @@
 # (".qemu" runs the arm64 apps of a cross build under the emulator; test/arm64/cross_tests.cmake).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$here/scripts/lib/args.sh"
 
 die() { echo "run-drone: $*" >&2; echo "run-drone: see --help" >&2; exit 2; }
 id="" camera="" vio="" fc="" key="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
@@ -67,7 +68,7 @@ done
 [ "$insecure" = 0 ] || [ -z "$key" ] || die "--key and --insecure exclude each other"
 [ -z "$roster" ] || [[ "$roster" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
 [[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--preflight-timeout: expected seconds, got '$preflight_timeout'"
-[ -z "$noise_quadratic" ] || { [[ "$noise_quadratic" =~ ^[0-9]+([.][0-9]+)?$ ]] && awk -v v="$noise_quadratic" 'BEGIN { exit !(v > 0) }'; } ||
+[ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
   die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 
 # Sources → app flags.

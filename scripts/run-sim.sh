@@ -25,6 +25,7 @@
 set -euo pipefail
 [ -n "${FACT_RUN_SIM_TRACE:-}" ] && set -x  # FACT_RUN_SIM_TRACE=1: trace the script
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$here/scripts/lib/args.sh"
 
 usage() {
   sed -n '2,23p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
@@ -90,7 +91,6 @@ while [ "$#" -gt 0 ]; do
   esac
 done
 is_uint() { [[ "$1" =~ ^[0-9]+$ ]]; }
-is_num() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]]; }
 [ -z "$drones" ] || { is_uint "$drones" && [ "$drones" -ge 2 ] && [ "$drones" -le 32 ]; } ||
   die_usage "--drones: expected an integer 2..32, got '$drones'"
 is_uint "$seed" && [ "${#seed}" -le 9 ] || die_usage "--seed: expected an integer 0..999999999, got '$seed'"
@@ -107,7 +107,7 @@ fi
 for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_rate" \
             "yaw-bound:$yaw_bound" "position-bound:$position_bound" "spin-rate:$spin_rate" "max-rounds:$max_rounds" \
             "noise-quadratic:$noise_quadratic"; do
-  is_num "${pair#*:}" && awk -v v="${pair#*:}" 'BEGIN { exit !(v > 0) }' ||
+  is_positive "${pair#*:}" ||
     die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
 done
 [ -r "$world" ] || die_usage "--world: cannot read '$world'"
