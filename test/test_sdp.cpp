@@ -354,6 +354,62 @@ INSTANTIATE_TEST_SUITE_P(OptimaCsv, SdpPeerAgreement, ::testing::ValuesIn(load_p
                          [](const ::testing::TestParamInfo<PeerRow>& info) { return info.param.name; });
 
 // ---------------------------------------------------------------------------------------
+// The complex form, solved in complex arithmetic.
+
+using fact::test::noisy_plain_cost;
+
+TEST(SdpComplexForm, AutomaticSolvesItInComplexArithmeticAndAgreesWithTheInteriorPoint) {
+  int climbed = 0;  // instances whose optimum has rank > 2: the staircase had to climb
+  for (int n : {3, 5, 6, 8, 12}) {
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+      SCOPED_TRACE("N = " + std::to_string(n) + ", seed " + std::to_string(seed));
+      const Eigen::MatrixXd C = fact::sdp::complex_form(noisy_plain_cost(n, seed));
+      const Result r = fact::sdp::solve(C, 2);
+      EXPECT_EQ(r.method_used, Method::complex_low_rank);
+      expect_certificate(C, 2, r);
+      // Λ_ii = μ_i I₂: the complex certificate's multipliers sit on the block diagonals.
+      for (Eigen::Index i = 0; i < C.rows(); i += 2) {
+        EXPECT_EQ(r.Lambda(i, 1), 0.0);
+        EXPECT_EQ(r.Lambda(i + 1, 0), 0.0);
+        EXPECT_EQ(r.Lambda(i, 0), r.Lambda(i + 1, 1));
+      }
+      if (r.rank > 2) ++climbed;
+      Options o;
+      o.method = Method::interior_point;
+      const Result ip = fact::sdp::solve(C, 2, o);
+      EXPECT_LE(r.dual_bound, ip.objective + 1e-12 * r.scale);
+      if (ip.certified()) {
+        EXPECT_LE(ip.dual_bound, r.objective + 1e-12 * r.scale);
+      }
+    }
+  }
+  EXPECT_GT(climbed, 0) << "no instance had a high-rank optimum: the staircase was not exercised";
+}
+
+TEST(SdpComplexForm, ExplicitMethodRejectsACostThatIsNotAComplexEmbedding) {
+  Options o;
+  o.method = Method::complex_low_rank;
+  const Result plain = fact::sdp::solve(noisy_plain_cost(5, 1), 2, o);
+  EXPECT_EQ(plain.status, Status::invalid_input);
+  EXPECT_NE(plain.reason.find("complex_low_rank"), std::string::npos) << plain.reason;
+  EXPECT_NE(plain.reason.find("not the real embedding of a Hermitian matrix"), std::string::npos) << plain.reason;
+  EXPECT_NE(plain.reason.find("C(0,"), std::string::npos) << plain.reason;
+  const Result d1 = fact::sdp::solve(random_psd(6, 3), 1, o);
+  EXPECT_EQ(d1.status, Status::invalid_input);
+  EXPECT_NE(d1.reason.find("d = 1"), std::string::npos) << d1.reason;
+}
+
+TEST(SdpComplexForm, ABrokenBlockPatternFallsBackToTheRealSolver) {
+  Eigen::MatrixXd C = fact::sdp::complex_form(noisy_plain_cost(6, 2));
+  C(2, 4) = C(4, 2) = std::nextafter(C(2, 4), 1e300);  // one ulp: no longer [[a, −b], [b, a]]
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_NE(r.method_used, Method::complex_low_rank);
+  expect_certificate(C, 2, r);
+  const Result exact = fact::sdp::solve(fact::sdp::complex_form(noisy_plain_cost(6, 2)), 2);
+  EXPECT_NEAR(r.objective, exact.objective, 1e-9 * std::max(1.0, std::abs(exact.objective)));
+}
+
+// ---------------------------------------------------------------------------------------
 // Degenerate (non-unique) optima.
 
 TEST(SdpStatus, ZeroCostIsCertifiedNotUnique) {
@@ -482,12 +538,10 @@ TEST(SdpRounding, RotationAnglesAreInMinusPiToPi) {
 // ---------------------------------------------------------------------------------------
 // Determinism and duality.
 
-using fact::test::noisy_plain_cost;
-
 TEST(SdpDeterminism, RepeatedSolvesAreBitIdentical) {
   const std::vector<Eigen::MatrixXd> costs = {noisy_plain_cost(6, 4), fact::sdp::complex_form(noisy_plain_cost(5, 9)),
                                               random_symmetric(10, 12)};
-  for (Method m : {Method::automatic, Method::low_rank, Method::interior_point}) {
+  for (Method m : {Method::automatic, Method::low_rank, Method::interior_point, Method::complex_low_rank}) {
     for (std::size_t k = 0; k < costs.size(); ++k) {
       SCOPED_TRACE(std::string(fact::sdp::to_string(m)) + " cost " + std::to_string(k));
       Options o;
@@ -527,11 +581,15 @@ TEST(SdpDuality, CertifiedResultsHaveConsistentBoundsForEveryMethod) {
     SCOPED_TRACE(inst.label);
     const Result automatic = fact::sdp::solve(inst.C, inst.d);
     expect_certificate(inst.C, inst.d, automatic);
-    for (Method m : {Method::low_rank, Method::interior_point}) {
+    for (Method m : {Method::low_rank, Method::interior_point, Method::complex_low_rank}) {
       SCOPED_TRACE(fact::sdp::to_string(m));
       Options o;
       o.method = m;
       const Result r = fact::sdp::solve(inst.C, inst.d, o);
+      if (m == Method::complex_low_rank && inst.label.rfind("complex", 0) != 0) {
+        EXPECT_EQ(r.status, Status::invalid_input);  // only the complex form has the block pattern
+        continue;
+      }
       EXPECT_EQ(r.method_used, m);
       if (!r.certified()) continue;  // a single method may legitimately fail to certify
       expect_certificate(inst.C, inst.d, r);

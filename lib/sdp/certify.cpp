@@ -28,6 +28,14 @@ Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::Matrix
   return S;
 }
 
+void bound_from_spectrum(Certificate& cert) {
+  cert.min_eig = cert.eigenvalues(0);
+  // The eigensolver's own backward error is about n·ε·‖S‖₂; a λ_min inside it is zero.
+  const double n = static_cast<double>(cert.eigenvalues.size());
+  const double eig_error = 4.0 * n * std::numeric_limits<double>::epsilon() * cert.eigenvalues.cwiseAbs().maxCoeff();
+  cert.dual_bound = cert.trace_lambda + n * std::min(0.0, cert.min_eig + eig_error);
+}
+
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector) {
   Certificate cert;
   cert.lambda = lambda;
@@ -36,12 +44,8 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
       S, want_vector ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
   cert.eigenvalues = eig.eigenvalues();
   if (want_vector) cert.min_vector = eig.eigenvectors().col(0);
-  cert.min_eig = cert.eigenvalues(0);
   for (Eigen::Index i = 0; i < C.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
-  // The eigensolver's own backward error is about n·ε·‖S‖₂; a λ_min inside it is zero.
-  const double n = static_cast<double>(C.rows());
-  const double eig_error = 4.0 * n * std::numeric_limits<double>::epsilon() * cert.eigenvalues.cwiseAbs().maxCoeff();
-  cert.dual_bound = cert.trace_lambda + n * std::min(0.0, cert.min_eig + eig_error);
+  bound_from_spectrum(cert);
   return cert;
 }
 

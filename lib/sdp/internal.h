@@ -2,6 +2,9 @@
 // All functions work on the scaled problem (‖C‖_F = 1).
 #pragma once
 
+#include <algorithm>
+#include <limits>
+
 #include "fact/sdp.h"
 
 namespace fact::sdp::detail {
@@ -23,6 +26,9 @@ Eigen::MatrixXd lambda_from_factor(const Eigen::MatrixXd& C, const Eigen::Matrix
 Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d);
 void certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& S);
 
+// min_eig and dual_bound of cert from its eigenvalues (all n of S) and trace_lambda.
+void bound_from_spectrum(Certificate& cert);
+
 // Eigen-analysis of S for a given Λ. With want_vector, also the eigenvector of λ_min.
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector);
 
@@ -33,6 +39,29 @@ int block_coordinate_sweeps(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y,
 
 // Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol. Returns the steps taken.
 int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol);
+
+// One Levenberg–Marquardt-damped Newton step, shared by the real and the complex Newton: H + μI
+// (H: the Hessian in tangent coordinates, restored on return) is factored with μ = damping,
+// raised 10× while it is not positive definite or the trial cost trial(η) of η = −(H + μI)⁻¹ g
+// exceeds f + noise, at most 12 times. Returns the accepted trial cost, or NaN when no try was
+// accepted; after an accepted step damping becomes 10·max(1e-12, μ/100), i.e. 10× lower.
+template <class Trial>
+double damped_newton_step(Eigen::MatrixXd& H, Eigen::LLT<Eigen::MatrixXd>& llt, const Eigen::VectorXd& g,
+                          Eigen::VectorXd& eta, double& damping, double f, double noise, Trial trial) {
+  for (int tries = 0; tries < 12; ++tries, damping *= 10) {
+    H.diagonal().array() += damping;  // shifted in place: the factorisation copies H + μI
+    llt.compute(H);
+    H.diagonal().array() -= damping;
+    if (llt.info() != Eigen::Success) continue;  // H + μI not positive definite: more damping
+    eta = llt.solve(-g);
+    const double f_next = trial(eta);
+    if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
+      damping = 10 * std::max(1e-12, damping / 100);
+      return f_next;
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
 
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
 // leaving the rest untouched, at the first block with no direction (all zero).
@@ -73,5 +102,44 @@ Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
 
 // Largest factor rank the staircase needs: the Pataki bound for N·d(d+1)/2 constraints.
 int pataki_rank(int blocks, int d);
+
+// The tight complex form (complex_low_rank.cpp).
+// Empty when every 2×2 block of C is exactly [[a, −b], [b, a]], so that C is the real
+// embedding of a Hermitian matrix (complex_form always returns one); otherwise the first
+// entry that breaks the pattern, named with its value.
+std::string complex_embedding_mismatch(const Eigen::MatrixXd& C);
+// The Hermitian N × N matrix H whose real embedding is C (2N × 2N): H_ij = C(2i,2j) + i·C(2i+1,2j).
+Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C);
+// The real embedding of a complex factor (N × p → 2N × 2p), so emb(Y) emb(Y)ᵀ = emb(Y Yᴴ).
+Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y);
+// Damped Riemannian Newton on unit rows of Y (N × p complex) for tr(Yᴴ H Y), until
+// ‖grad‖ < grad_tol. Returns the steps taken.
+int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol);
+
+struct ComplexOutcome {
+  Eigen::MatrixXcd Y;           // N × p factor with unit rows
+  Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
+  Eigen::VectorXd eigenvalues;  // of S = H − diag(μ), ascending, N
+  Eigen::MatrixXcd eigenvectors;  // of S, N × N, only when asked for
+  int iterations = 0;           // Newton steps, all levels
+  bool certified = false;       // λ_min(S) ≥ −psd_tol
+};
+
+// The multipliers and the spectrum of S = H − diag(μ) at Y (eigenvectors with want_vectors).
+ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors);
+
+// A complex factor (N × p, unit rows) of the Hermitian Z whose embedding is nearest to X
+// (2N × 2N, the K-average of X's blocks): Z's eigenvectors of eigenvalues above 1e-6 of the
+// largest, scaled by √eigenvalue, rows then normalised. The interior point's handoff to Newton.
+Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X);
+
+// The certificate of the d = 2 problem on emb(H): Λ_ii = μ_i I₂, and S = emb(H − diag μ) has
+// every eigenvalue of H − diag μ twice.
+Certificate complex_certificate(const ComplexOutcome& outcome);
+
+// Riemannian staircase in ℂ: spectral start at p = 1, Newton, and while S has a negative
+// eigenvalue a column along its eigenvector, as long as the Newton system of the next rank
+// has at most max_unknowns unknowns (N·(2p − 1)).
+ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns);
 
 }  // namespace fact::sdp::detail

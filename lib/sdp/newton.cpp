@@ -153,23 +153,12 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
       hessian<1>(r, blocks, t, ws);
     else
       hessian<2>(r, blocks, t, ws);
-    bool stepped = false;
-    for (int tries = 0; tries < 12 && !stepped; ++tries, mu *= 10) {
-      ws.H.diagonal().array() += mu;  // shifted in place: the factorisation copies H + μI
-      ws.llt.compute(ws.H);
-      ws.H.diagonal().array() -= mu;
-      if (ws.llt.info() != Eigen::Success) continue;  // H + μI not positive definite: more damping
-      ws.eta = ws.llt.solve(-ws.g);
-      const double f_next = trial_step(C, Y, d, blocks, t, ws);
-      if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
-        Y.swap(ws.next);
-        ws.CY.swap(ws.next_CY);
-        f = f_next;
-        stepped = true;
-        mu = std::max(1e-12, mu / 100);
-      }
-    }
-    if (!stepped) break;
+    const double f_next = damped_newton_step(ws.H, ws.llt, ws.g, ws.eta, mu, f, noise,
+                                             [&](const Eigen::VectorXd&) { return trial_step(C, Y, d, blocks, t, ws); });
+    if (std::isnan(f_next)) break;
+    Y.swap(ws.next);
+    ws.CY.swap(ws.next_CY);
+    f = f_next;
   }
   return it;
 }

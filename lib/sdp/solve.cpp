@@ -28,6 +28,20 @@ constexpr int kEarlyPolishPerRow = 4;
 constexpr int kEarlyPolishSteps = 3;
 constexpr int kEarlyPolishMaxRows = 48;  // above it an interior-point iteration is cheaper than the handoff's eigensolves
 
+// The complex staircase in automatic mode climbs while the next rank's Newton system has at most
+// this many unknowns (N·(2p − 1)); beyond it the interior point, handed to complex Newton at a gap
+// of kHandoffGap, measures faster (BENCHMARKS.md, session 11, tight_noisy: the staircase takes
+// 0.09 / 0.11 / 0.27 ms at N = 5 / 6 / 12 against the interior point's 0.13 / 0.18 / 0.79 ms,
+// and 17 ms at N = 32, p = 3, against 10–13 ms). Explicit complex_low_rank climbs to kMaxPolishSize.
+constexpr int kComplexMaxUnknowns = 80;
+// The complex form's handoff, at any n: Newton in complex arithmetic gets kComplexPolishSteps
+// steps when its system has at most kMaxComplexPolishSize unknowns. In the benchmark 3, 2, 2 and
+// 4 steps certify tight_noisy at N = 32, 64, 100 and 200; at N = 200, p = 7, the system has 2600
+// unknowns and a step takes about 0.4 s, and it certifies an instance that the interior point
+// alone leaves at a gap of 4e-7.
+constexpr int kComplexPolishSteps = 4;
+constexpr int kMaxComplexPolishSize = 3000;
+
 struct Candidate {
   Eigen::MatrixXd Y;      // n × r factor of X
   Certificate cert;       // certificate for it (scaled problem)
@@ -68,6 +82,34 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
   return c;
+}
+
+// A complex outcome on H (C = emb(H), scaled) as a candidate: factor and certificate in d = 2 terms.
+Candidate candidate_of(const Eigen::MatrixXd& C, const detail::ComplexOutcome& out, Method method) {
+  Candidate c{detail::real_factor(out.Y), detail::complex_certificate(out), 0, out.iterations, method, {}};
+  c.primal = primal_objective(C, c.Y, c.cert, 2);
+  return c;
+}
+
+// The complex staircase on H. In automatic mode each level gets at most 25 Newton steps, as
+// the real rank-d path: on the non-unique N = 200 instance rank 1 otherwise spends 60 steps
+// (54 ms) before the interior point takes over.
+Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
+  const bool automatic = o.method == Method::automatic;
+  const int max_unknowns = automatic ? kComplexMaxUnknowns : kMaxPolishSize;
+  if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
+  return candidate_of(C, detail::solve_complex_low_rank(detail::hermitian_of(C), o, max_unknowns), Method::complex_low_rank);
+}
+
+// Newton in complex arithmetic from the interior point's X (complex form only), at the rank of
+// X's K-average, for at most max_steps steps; nullopt when its system would exceed
+// kMaxComplexPolishSize.
+std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXd& X, int iterations, int max_steps) {
+  Eigen::MatrixXcd Y = detail::complex_factor_of(X);
+  if (Y.rows() * (2 * Y.cols() - 1) > kMaxComplexPolishSize) return std::nullopt;
+  const Eigen::MatrixXcd H = detail::hermitian_of(C);
+  iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
+  return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
 }
 
 Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPointOutcome& ip) {
@@ -122,11 +164,18 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps when that polish's system
 // is small (kEarlyPolishPerRow unknowns per row), and resumes where it stopped when the polish
 // does not certify.
-Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o) {
+Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form) {
   const int n = static_cast<int>(C.rows());
-  const bool early = o.method == Method::automatic && n <= kEarlyPolishMaxRows;
+  const bool early = o.method == Method::automatic && (n <= kEarlyPolishMaxRows || complex_form);
   const detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, early ? kHandoffGap : 0.0);
   if (!ip.handed_off) return candidate_of(C, d, ip);
+  if (complex_form) {
+    const std::optional<Candidate> polished = complex_polish(C, ip.X, ip.iterations, kComplexPolishSteps);
+    if (polished && is_certified(*polished, o)) return *polished;
+    detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
+    rest.iterations += ip.iterations;
+    return candidate_of(C, d, rest);
+  }
   Candidate handed;  // only the factor: polish certifies its own result
   handed.Y = detail::factor_psd(ip.X, 0.0);
   handed.iterations = ip.iterations;
@@ -184,12 +233,22 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.scale = C.norm() > 0 ? C.norm() : 1.0;
   const Eigen::MatrixXd Cs = C / r.scale;  // scaled problem, ‖Cs‖_F = 1 (or C = 0)
 
+  const bool complex_form = d == 2 && (options.method == Method::automatic || options.method == Method::complex_low_rank) &&
+                            detail::complex_embedding_mismatch(Cs).empty();
+  if (options.method == Method::complex_low_rank && !complex_form) {
+    r.reason = "method complex_low_rank: " +
+               (d != 2 ? "d = " + std::to_string(d) + ", needs d = 2" : detail::complex_embedding_mismatch(C));
+    return r;
+  }
   Candidate best;
   const bool try_low_rank = options.method != Method::interior_point;
-  if (try_low_rank) best = from_low_rank(Cs, d, options);
+  if (complex_form)
+    best = from_complex_low_rank(Cs, options);
+  else if (try_low_rank)
+    best = from_low_rank(Cs, d, options);
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(best, options))) {
-    Candidate ip = from_interior_point(Cs, d, options);
+    Candidate ip = from_interior_point(Cs, d, options, complex_form);
     ip.iterations += best.iterations;
     if (options.method == Method::automatic && !is_certified(ip, options)) {
       std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60);

@@ -56,6 +56,7 @@ const char* to_string(Method m) {
     case Method::automatic: return "automatic";
     case Method::low_rank: return "low_rank";
     case Method::interior_point: return "interior_point";
+    case Method::complex_low_rank: return "complex_low_rank";
   }
   return "unknown";
 }

@@ -4,8 +4,9 @@
 //
 // C is n×n real symmetric with n = d·N (N blocks, one per drone). d = 2 is the
 // real SO(2)/O(2) relaxation the paper uses; d = 1 is the MaxCut-type problem.
-// The complex U(1) form (Hermitian N×N, unit diagonal) is solved through its real
-// embedding with d = 2 (see complex_form / real_embedding below).
+// The complex U(1) form (Hermitian N×N, unit diagonal) is passed as its real embedding with
+// d = 2 (see complex_form / real_embedding below); the solver recognises that structure and
+// works on the N×N Hermitian matrix (Method::complex_low_rank).
 //
 // The solver is written here (no MOSEK, SDPA or CSDP). Every solve returns a
 // Result that says how sure it is: a dual certificate Λ (block diagonal), the
@@ -28,9 +29,13 @@ enum class Status {
 const char* to_string(Status s);
 
 enum class Method {
-  automatic,       // rank-d Riemannian Newton first; interior point when that does not certify
-  low_rank,        // Burer–Monteiro Riemannian staircase with block-coordinate updates
-  interior_point,  // primal–dual path following (HKM direction, Mehrotra corrector)
+  automatic,         // complex_low_rank for a complex-form C (d = 2), otherwise rank-d Riemannian
+                     // Newton; the interior point when that does not certify
+  low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
+  interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector)
+  complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
+                     // Riemannian staircase on Y ∈ ℂ^{N×p}, unit rows, Newton steps in complex
+                     // arithmetic; any other C is invalid_input for it
 };
 const char* to_string(Method m);
 

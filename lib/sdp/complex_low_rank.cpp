@@ -1,0 +1,273 @@
+// The tight complex (U(1)) form solved in complex arithmetic: Burer–Monteiro staircase with a
+// damped Riemannian Newton step on a product of unit spheres in ℂ^p.
+//
+// A d = 2 cost C (2N × 2N) whose every 2×2 block is [[a, −b], [b, a]] is the real embedding of
+// the Hermitian N × N matrix H with H_ij = a + i·b (C = complex_form(Q) always is). The d = 2
+// problem on C then has a K-invariant optimum X = emb(Z), Z ⪰ 0 Hermitian with unit diagonal,
+// and ⟨C, emb(Z)⟩ = 2 tr(H Z). With Z = Y Yᴴ, Y N × p complex with unit rows:
+//   cost           f(Y) = tr(Yᴴ H Y)
+//   multipliers    μ_i = Re (H Y)_i y_iᴴ               (Λ_ii = μ_i I₂ in the d = 2 problem)
+//   certificate    S = H − diag(μ), N × N Hermitian      (the d = 2 one is emb(S))
+//   gradient       grad f = 2 S Y (row by row tangent to the sphere)
+//   Hessian        Hess f[V] = Proj_Y(2 S V)
+// Row i's tangent space {w ∈ ℂ^p : Re w y_iᴴ = 0} has real dimension t = 2p − 1 and the
+// orthonormal basis i·y_i, u_k, i·u_k (u_k, k < p − 1, a unitary complement of y_i). The
+// Newton system is N·t × N·t real, against (2·2p − 3)·N for the same rank in the d = 2 form.
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "internal.h"
+
+namespace fact::sdp::detail {
+namespace {
+
+using Eigen::MatrixXcd;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+constexpr std::complex<double> kI{0.0, 1.0};
+constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
+
+// Every matrix of one Newton run at rank p, allocated once. N rows, t = 2p − 1.
+struct ComplexWorkspace {
+  ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
+      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), W(N * t, N * t), Hm(N * t, N * t), llt(N * t),
+        g(N * t), eta(N * t), next(N, p), next_HY(N, p) {}
+  MatrixXcd HY;     // H Y, N × p
+  VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
+  MatrixXcd S;      // H − diag(μ), N × N
+  MatrixXcd SY;     // S Y, N × p
+  MatrixXcd basis;  // row i·t + a: tangent direction a of row i (a p-vector), N·t × p
+  MatrixXcd W;      // conj(basis) basisᵀ: inner products of every pair of directions, N·t × N·t
+  MatrixXd Hm;      // Hessian in the bases: 2 Re(S_ij W_(ia)(jb)), N·t × N·t
+  Eigen::LLT<MatrixXd> llt;  // factor of Hm + μ_LM I
+  VectorXd g;       // gradient coefficients 2 Re⟨b_ia, (S Y)_i⟩, N·t
+  VectorXd eta;     // Newton step coefficients, N·t
+  MatrixXcd next;   // trial factor, N × p
+  MatrixXcd next_HY;  // H · next, N × p
+};
+
+// μ, S and S Y for the current Y (ws.HY = H Y already).
+void multipliers(const MatrixXcd& H, const MatrixXcd& Y, ComplexWorkspace& ws) {
+  ws.mu = (ws.HY.array() * Y.array().conjugate()).real().rowwise().sum();
+  ws.S = H;
+  ws.S.diagonal() -= ws.mu.cast<std::complex<double>>();
+  ws.SY = ws.HY - ws.mu.asDiagonal() * Y;
+}
+
+// Orthonormal tangent basis of every row into ws.basis (rows i·t … i·t + t − 1).
+void tangent_bases(const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
+  const Eigen::Index N = Y.rows(), p = Y.cols();
+  Eigen::HouseholderQR<MatrixXcd> qr(p, 1);
+  MatrixXcd Q(p, p);  // unitary, column 0 ∝ y_iᵀ; columns 1… transposed are the complement u_k
+  for (Eigen::Index i = 0; i < N; ++i) {
+    ws.basis.row(i * t) = kI * Y.row(i);
+    if (p == 1) continue;
+    qr.compute(Y.row(i).transpose());
+    Q = qr.householderQ();
+    for (Eigen::Index k = 1; k < p; ++k) {
+      ws.basis.row(i * t + 2 * k - 1) = Q.col(k).transpose();
+      ws.basis.row(i * t + 2 * k) = kI * Q.col(k).transpose();
+    }
+  }
+}
+
+// Hm = 2 Re(S_ij · W_(ia)(jb)) with W = conj(basis) basisᵀ.
+void hessian(Eigen::Index N, int t, ComplexWorkspace& ws) {
+  ws.W.noalias() = ws.basis.conjugate() * ws.basis.transpose();
+  for (Eigen::Index j = 0; j < N; ++j)
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const std::complex<double> s = 2.0 * ws.S(i, j);
+      ws.Hm.block(i * t, j * t, t, t) = (s * ws.W.block(i * t, j * t, t, t).array()).real();
+    }
+}
+
+// ws.next = rows of Y moved by η and normalised; returns f(next) (ws.next_HY = H next).
+double trial_step(const MatrixXcd& H, const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
+  ws.next = Y;
+  for (Eigen::Index i = 0; i < Y.rows(); ++i) {
+    for (int a = 0; a < t; ++a) ws.next.row(i) += ws.eta[i * t + a] * ws.basis.row(i * t + a);
+    ws.next.row(i).normalize();
+  }
+  ws.next_HY.noalias() = H * ws.next;
+  return (ws.next_HY.array() * ws.next.array().conjugate()).real().sum();
+}
+
+}  // namespace
+
+std::string complex_embedding_mismatch(const Eigen::MatrixXd& C) {
+  std::ostringstream why;
+  if (C.rows() != C.cols() || C.rows() % 2 != 0) {
+    why << "C is " << C.rows() << "×" << C.cols() << ": not 2N × 2N";
+    return why.str();
+  }
+  for (Eigen::Index j = 0; j < C.cols(); j += 2)
+    for (Eigen::Index i = 0; i < C.rows(); i += 2) {
+      if (C(i, j) != C(i + 1, j + 1)) {
+        why << "C(" << i << "," << j << ") = " << C(i, j) << " but C(" << i + 1 << "," << j + 1 << ") = " << C(i + 1, j + 1);
+      } else if (C(i, j + 1) != -C(i + 1, j)) {
+        why << "C(" << i << "," << j + 1 << ") = " << C(i, j + 1) << " but C(" << i + 1 << "," << j << ") = " << C(i + 1, j);
+      } else {
+        continue;
+      }
+      why << ": not the real embedding of a Hermitian matrix (every 2×2 block [[a, −b], [b, a]])";
+      return why.str();
+    }
+  return "";
+}
+
+Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C) {
+  const Eigen::Index N = C.rows() / 2;
+  MatrixXcd H(N, N);  // H_ij = C(2i, 2j) + i·C(2i+1, 2j), N × N
+  for (Eigen::Index j = 0; j < N; ++j)
+    for (Eigen::Index i = 0; i < N; ++i) H(i, j) = {C(2 * i, 2 * j), C(2 * i + 1, 2 * j)};
+  return H;
+}
+
+Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y) {
+  MatrixXd out(2 * Y.rows(), 2 * Y.cols());  // block (i, k) = [[Re y, −Im y], [Im y, Re y]]
+  for (Eigen::Index k = 0; k < Y.cols(); ++k)
+    for (Eigen::Index i = 0; i < Y.rows(); ++i) {
+      const double re = Y(i, k).real(), im = Y(i, k).imag();
+      out.block<2, 2>(2 * i, 2 * k) << re, -im, im, re;
+    }
+  return out;
+}
+
+int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
+  const Eigen::Index N = H.rows(), p = Y.cols();
+  const int t = static_cast<int>(2 * p - 1);
+  ComplexWorkspace ws(N, p, t);
+  double damping = 1e-8;  // Levenberg–Marquardt shift of the Newton system
+  ws.HY.noalias() = H * Y;
+  double f = (ws.HY.array() * Y.array().conjugate()).real().sum();  // tr(Yᴴ H Y)
+  const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    multipliers(H, Y, ws);
+    tangent_bases(Y, t, ws);
+    for (Eigen::Index i = 0; i < N; ++i)  // 2 Re⟨b_ia, (S Y)_i⟩
+      for (int a = 0; a < t; ++a) ws.g[i * t + a] = 2.0 * ws.basis.row(i * t + a).dot(ws.SY.row(i)).real();
+    if (ws.g.norm() < grad_tol) break;
+    hessian(N, t, ws);
+    const double f_next = damped_newton_step(ws.Hm, ws.llt, ws.g, ws.eta, damping, f, noise,
+                                             [&](const VectorXd&) { return trial_step(H, Y, t, ws); });
+    if (std::isnan(f_next)) break;
+    Y.swap(ws.next);
+    ws.HY.swap(ws.next_HY);
+    f = f_next;
+  }
+  return it;
+}
+
+namespace {
+
+// Unit eigenvector of H's smallest eigenvalue, N. Above N = 32 by subspace inverse iteration on
+// H + δI (one Cholesky factorisation, then O(N²) per step, two guard vectors) when H + δI is
+// positive definite; otherwise from the full eigen-decomposition.
+Eigen::VectorXcd bottom_eigenvector(const MatrixXcd& H) {
+  const Eigen::Index N = H.rows();
+  const auto full_decomposition = [&] { return Eigen::VectorXcd(Eigen::SelfAdjointEigenSolver<MatrixXcd>(H).eigenvectors().col(0)); };
+  if (N <= 32) return full_decomposition();
+  const double shift = 1e-10 * std::max(1.0, H.diagonal().real().cwiseAbs().maxCoeff());
+  const Eigen::LLT<MatrixXcd> chol(H + shift * MatrixXcd::Identity(N, N));
+  if (chol.info() != Eigen::Success) return full_decomposition();
+  MatrixXcd V(N, 3);  // deterministic start, N × 3
+  for (Eigen::Index i = 0; i < N; ++i)
+    for (Eigen::Index k = 0; k < 3; ++k) V(i, k) = std::polar(1.0 + 0.5 * std::sin(1.3 * i + k), 0.7 * i * (k + 1.618));
+  for (int step = 0; step < 12; ++step) V = chol.solve(V).householderQr().householderQ() * MatrixXcd::Identity(N, 3);
+  const MatrixXcd T = V.adjoint() * H * V;  // Rayleigh–Ritz, 3 × 3
+  return V * Eigen::SelfAdjointEigenSolver<MatrixXcd>(T).eigenvectors().col(0);
+}
+
+// The spectral start: H's bottom eigenvector with every entry normalised to |z_i| = 1 (an entry
+// at zero set to 1), N × 1. Exact on noise-free data.
+Eigen::MatrixXcd spectral_start(const MatrixXcd& H) {
+  MatrixXcd Y = bottom_eigenvector(H);
+  for (Eigen::Index i = 0; i < Y.rows(); ++i) Y(i, 0) = std::abs(Y(i, 0)) > 0 ? Y(i, 0) / std::abs(Y(i, 0)) : 1.0;
+  return Y;
+}
+
+// [Y, α√N V] with rows normalised (V: unit eigenvectors, N × k), for the α in 1, ½, … 2⁻⁹
+// of least cost.
+Eigen::MatrixXcd escape(const MatrixXcd& H, const MatrixXcd& Y, const MatrixXcd& v) {
+  MatrixXcd next(Y.rows(), Y.cols() + v.cols()), best;
+  double best_f = (H * Y).cwiseProduct(Y.conjugate()).real().sum();
+  for (double alpha = 1.0; alpha > 1e-3; alpha *= 0.5) {
+    next << Y, alpha * v * std::sqrt(double(Y.rows()));
+    next.rowwise().normalize();
+    const double f = (H * next).cwiseProduct(next.conjugate()).real().sum();
+    if (f < best_f || best.size() == 0) { best_f = f; best = next; }
+  }
+  return best;
+}
+
+}  // namespace
+
+ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
+  ComplexOutcome out;
+  out.Y = std::move(Y);
+  out.iterations = iterations;
+  out.mu = (H * out.Y).cwiseProduct(out.Y.conjugate()).real().rowwise().sum();
+  MatrixXcd S = H;  // H − diag(μ), N × N
+  S.diagonal() -= out.mu.cast<std::complex<double>>();
+  Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(S, want_vectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
+  out.eigenvalues = eig.eigenvalues();
+  if (want_vectors) out.eigenvectors = eig.eigenvectors();
+  return out;
+}
+
+ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns) {
+  const Eigen::Index N = H.rows();
+  MatrixXcd Y = spectral_start(H);
+  int iterations = 0;
+  for (;;) {
+    iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12);
+    const Eigen::Index p = Y.cols();
+    const bool can_climb = N * (2 * (p + 1) - 1) <= max_unknowns && p < N;
+    ComplexOutcome out = complex_outcome(H, std::move(Y), iterations, can_climb);
+    out.certified = out.eigenvalues[0] >= -options.psd_tol;
+    if (out.certified || !can_climb) return out;
+    // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,
+    // session 11: two save a level at N = 32 and 64 without slowing the next one).
+    int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());
+    while (columns > 1 && N * (2 * (p + columns) - 1) > max_unknowns) --columns;
+    Y = escape(H, out.Y, out.eigenvectors.leftCols(columns));
+  }
+}
+
+Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X) {
+  const Eigen::Index N = X.rows() / 2;
+  MatrixXcd Z(N, N);  // K-average of X as a Hermitian matrix, N × N
+  for (Eigen::Index j = 0; j < N; ++j)
+    for (Eigen::Index i = 0; i < N; ++i)
+      Z(i, j) = {0.5 * (X(2 * i, 2 * j) + X(2 * i + 1, 2 * j + 1)), 0.5 * (X(2 * i + 1, 2 * j) - X(2 * i, 2 * j + 1))};
+  const Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(Z);
+  const Eigen::VectorXd& values = eig.eigenvalues();  // ascending
+  Eigen::Index p = 0;
+  while (p < N && values[N - 1 - p] > 1e-6 * values[N - 1]) ++p;
+  MatrixXcd Y(N, std::max<Eigen::Index>(p, 1));
+  for (Eigen::Index k = 0; k < Y.cols(); ++k)
+    Y.col(k) = eig.eigenvectors().col(N - 1 - k) * std::sqrt(std::max(0.0, values[N - 1 - k]));
+  for (Eigen::Index i = 0; i < N; ++i) {
+    const double norm = Y.row(i).norm();
+    if (norm > 0) Y.row(i) /= norm; else Y(i, 0) = 1.0;
+  }
+  return Y;
+}
+
+Certificate complex_certificate(const ComplexOutcome& outcome) {
+  const Eigen::Index N = outcome.mu.size();
+  Certificate cert;
+  cert.lambda = Eigen::MatrixXd::Zero(2 * N, 2);  // Λ_ii = μ_i I₂ stacked, 2N × 2
+  cert.eigenvalues.resize(2 * N);
+  for (Eigen::Index i = 0; i < N; ++i) {
+    cert.lambda(2 * i, 0) = cert.lambda(2 * i + 1, 1) = outcome.mu[i];
+    cert.eigenvalues[2 * i] = cert.eigenvalues[2 * i + 1] = outcome.eigenvalues[i];
+  }
+  cert.trace_lambda = 2.0 * outcome.mu.sum();
+  bound_from_spectrum(cert);
+  return cert;
+}
+
+}  // namespace fact::sdp::detail
