@@ -124,16 +124,6 @@ Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C) {
   return H;
 }
 
-Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y) {
-  MatrixXd out(2 * Y.rows(), 2 * Y.cols());  // block (i, k) = [[Re y, −Im y], [Im y, Re y]]
-  for (Eigen::Index k = 0; k < Y.cols(); ++k)
-    for (Eigen::Index i = 0; i < Y.rows(); ++i) {
-      const double re = Y(i, k).real(), im = Y(i, k).imag();
-      out.block<2, 2>(2 * i, 2 * k) << re, -im, im, re;
-    }
-  return out;
-}
-
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
   const Eigen::Index N = H.rows(), p = Y.cols();
   const int t = static_cast<int>(2 * p - 1);
@@ -162,28 +152,11 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 
 namespace {
 
-// Unit eigenvector of H's smallest eigenvalue, N. Above N = 32 by subspace inverse iteration on
-// H + δI (one Cholesky factorisation, then O(N²) per step, two guard vectors) when H + δI is
-// positive definite; otherwise from the full eigen-decomposition.
-Eigen::VectorXcd bottom_eigenvector(const MatrixXcd& H) {
-  const Eigen::Index N = H.rows();
-  const auto full_decomposition = [&] { return Eigen::VectorXcd(Eigen::SelfAdjointEigenSolver<MatrixXcd>(H).eigenvectors().col(0)); };
-  if (N <= 32) return full_decomposition();
-  const double shift = 1e-10 * std::max(1.0, H.diagonal().real().cwiseAbs().maxCoeff());
-  const Eigen::LLT<MatrixXcd> chol(H + shift * MatrixXcd::Identity(N, N));
-  if (chol.info() != Eigen::Success) return full_decomposition();
-  MatrixXcd V(N, 3);  // deterministic start, N × 3
-  for (Eigen::Index i = 0; i < N; ++i)
-    for (Eigen::Index k = 0; k < 3; ++k) V(i, k) = std::polar(1.0 + 0.5 * std::sin(1.3 * i + k), 0.7 * i * (k + 1.618));
-  for (int step = 0; step < 12; ++step) V = chol.solve(V).householderQr().householderQ() * MatrixXcd::Identity(N, 3);
-  const MatrixXcd T = V.adjoint() * H * V;  // Rayleigh–Ritz, 3 × 3
-  return V * Eigen::SelfAdjointEigenSolver<MatrixXcd>(T).eigenvectors().col(0);
-}
-
-// The spectral start: H's bottom eigenvector with every entry normalised to |z_i| = 1 (an entry
-// at zero set to 1), N × 1. Exact on noise-free data.
+// The spectral start: H's bottom eigenvector (inverse iteration above N = 32, as the real path
+// above n = 64) with every entry normalised to |z_i| = 1 (an entry at zero set to 1), N × 1.
+// Exact on noise-free data.
 Eigen::MatrixXcd spectral_start(const MatrixXcd& H) {
-  MatrixXcd Y = bottom_eigenvector(H);
+  MatrixXcd Y = bottom_eigenvectors(H, 1, 32);
   for (Eigen::Index i = 0; i < Y.rows(); ++i) Y(i, 0) = std::abs(Y(i, 0)) > 0 ? Y(i, 0) / std::abs(Y(i, 0)) : 1.0;
   return Y;
 }

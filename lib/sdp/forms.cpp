@@ -2,7 +2,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "fact/sdp.h"
+#include "internal.h"
 
 namespace fact::sdp {
 
@@ -21,13 +21,21 @@ Eigen::MatrixXd complex_form(const Eigen::MatrixXd& Q) {
 
 Eigen::MatrixXd real_embedding(const Eigen::MatrixXcd& H) {
   if (H.rows() != H.cols()) throw std::invalid_argument("real_embedding: H must be square");
-  Eigen::MatrixXd out(2 * H.rows(), 2 * H.cols());
-  for (Eigen::Index i = 0; i < H.rows(); ++i)
-    for (Eigen::Index j = 0; j < H.cols(); ++j) {
-      const double re = H(i, j).real(), im = H(i, j).imag();
-      out.block<2, 2>(2 * i, 2 * j) << re, -im, im, re;
+  return detail::real_factor(H);
+}
+
+namespace detail {
+
+Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y) {
+  Eigen::MatrixXd out(2 * Y.rows(), 2 * Y.cols());  // block (i, k) = [[Re y, −Im y], [Im y, Re y]]
+  for (Eigen::Index k = 0; k < Y.cols(); ++k)
+    for (Eigen::Index i = 0; i < Y.rows(); ++i) {
+      const double re = Y(i, k).real(), im = Y(i, k).imag();
+      out.block<2, 2>(2 * i, 2 * k) << re, -im, im, re;
     }
   return out;
 }
+
+}  // namespace detail
 
 }  // namespace fact::sdp

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "fact/sdp.h"
@@ -63,6 +64,28 @@ double damped_newton_step(Eigen::MatrixXd& H, Eigen::LLT<Eigen::MatrixXd>& llt, 
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
+// n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
+// with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
+// M + δI is not positive definite (M indefinite), a full eigen-decomposition is used instead.
+// The real staircase and the complex one start from it.
+template <class Matrix>
+Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
+  const Eigen::Index n = M.rows();
+  const auto full_decomposition = [&] { return Matrix(Eigen::SelfAdjointEigenSolver<Matrix>(M).eigenvectors().leftCols(k)); };
+  if (n <= full_up_to) return full_decomposition();  // small: the full decomposition is as cheap
+  const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
+  const Eigen::LLT<Matrix> chol(M + shift * Matrix::Identity(n, n));
+  if (chol.info() != Eigen::Success) return full_decomposition();
+  Matrix V(n, k + 2);  // deterministic start, n × (k + 2)
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < V.cols(); ++j) V(i, j) = std::sin(1.0 + i * (j + 1.618) + 0.37 * j);
+  for (int step = 0; step < 12; ++step) V = chol.solve(V).householderQr().householderQ() * Matrix::Identity(n, V.cols());
+  const Matrix T = V.adjoint() * M * V;  // Rayleigh–Ritz on the subspace, (k + 2) × (k + 2)
+  Eigen::SelfAdjointEigenSolver<Matrix> small(T);
+  return V * small.eigenvectors().leftCols(k);
+}
+
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
 // leaving the rest untouched, at the first block with no direction (all zero).
 bool project_blocks(Eigen::MatrixXd& Y, int d);
@@ -110,7 +133,8 @@ int pataki_rank(int blocks, int d);
 std::string complex_embedding_mismatch(const Eigen::MatrixXd& C);
 // The Hermitian N × N matrix H whose real embedding is C (2N × 2N): H_ij = C(2i,2j) + i·C(2i+1,2j).
 Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C);
-// The real embedding of a complex factor (N × p → 2N × 2p), so emb(Y) emb(Y)ᵀ = emb(Y Yᴴ).
+// The real embedding of any complex matrix, entry by entry (N × p → 2N × 2p; forms.cpp, where
+// real_embedding uses it for square H), so emb(Y) emb(Y)ᵀ = emb(Y Yᴴ).
 Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y);
 // Damped Riemannian Newton on unit rows of Y (N × p complex) for tr(Yᴴ H Y), until
 // ‖grad‖ < grad_tol. Returns the steps taken.

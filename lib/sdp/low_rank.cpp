@@ -87,32 +87,10 @@ static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::Vect
   return next;
 }
 
-// The d eigenvectors of C's smallest eigenvalues (n × d), by subspace inverse iteration on
-// C + δI (one Cholesky factorisation, then O(n²) per step). For n ≤ 64, or when C + δI is not
-// positive definite (C indefinite), a full eigen-decomposition is used instead.
-static Eigen::MatrixXd bottom_eigenvectors(const Eigen::MatrixXd& C, int d) {
-  const Eigen::Index n = C.rows();
-  const auto full_decomposition = [&] {
-    return Eigen::MatrixXd(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(C).eigenvectors().leftCols(d));
-  };
-  if (n <= 64) return full_decomposition();  // small: the full decomposition is as cheap
-  const double shift = 1e-10 * std::max(1.0, C.diagonal().cwiseAbs().maxCoeff());
-  const Eigen::LLT<Eigen::MatrixXd> chol(C + shift * Eigen::MatrixXd::Identity(n, n));
-  if (chol.info() != Eigen::Success) return full_decomposition();
-  Eigen::MatrixXd V(n, d + 2);  // two guard vectors speed up convergence of the first d
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index k = 0; k < V.cols(); ++k) V(i, k) = std::sin(1.0 + i * (k + 1.618) + 0.37 * k);
-  for (int step = 0; step < 12; ++step) V = chol.solve(V).householderQr().householderQ() * Eigen::MatrixXd::Identity(n, V.cols());
-  // Rayleigh–Ritz on the subspace, smallest d Ritz vectors.
-  const Eigen::MatrixXd T = V.transpose() * C * V;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> small(T);
-  return V * small.eigenvectors().leftCols(d);
-}
-
 // Spectral start: the bottom-d eigenvectors of C, each block projected to orthonormal rows.
 // Exact when the data are noise-free and the optimum unique.
 static Eigen::MatrixXd spectral_factor(const Eigen::MatrixXd& C, int d, unsigned seed) {
-  Eigen::MatrixXd Y = bottom_eigenvectors(C, d);
+  Eigen::MatrixXd Y = bottom_eigenvectors(C, d, 64);
   const Eigen::MatrixXd fallback = random_factor(C.rows(), d, d, seed);
   for (Eigen::Index i = 0; i < Y.rows(); i += d) {
     const Eigen::MatrixXd block = polar_rows(Y.middleRows(i, d));

@@ -169,18 +169,16 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   const bool early = o.method == Method::automatic && (n <= kEarlyPolishMaxRows || complex_form);
   const detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, early ? kHandoffGap : 0.0);
   if (!ip.handed_off) return candidate_of(C, d, ip);
+  std::optional<Candidate> polished;
   if (complex_form) {
-    const std::optional<Candidate> polished = complex_polish(C, ip.X, ip.iterations, kComplexPolishSteps);
-    if (polished && is_certified(*polished, o)) return *polished;
-    detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
-    rest.iterations += ip.iterations;
-    return candidate_of(C, d, rest);
+    polished = complex_polish(C, ip.X, ip.iterations, kComplexPolishSteps);
+  } else {
+    Candidate handed;  // only the factor: polish certifies its own result
+    handed.Y = detail::factor_psd(ip.X, 0.0);
+    handed.iterations = ip.iterations;
+    handed.method = Method::interior_point;
+    polished = polish(C, d, handed, kEarlyPolishPerRow * n, kEarlyPolishSteps);
   }
-  Candidate handed;  // only the factor: polish certifies its own result
-  handed.Y = detail::factor_psd(ip.X, 0.0);
-  handed.iterations = ip.iterations;
-  handed.method = Method::interior_point;
-  const std::optional<Candidate> polished = polish(C, d, handed, kEarlyPolishPerRow * n, kEarlyPolishSteps);
   if (polished && is_certified(*polished, o)) return *polished;
   detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
   rest.iterations += ip.iterations;
