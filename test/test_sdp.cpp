@@ -386,6 +386,31 @@ TEST(SdpComplexForm, AutomaticSolvesItInComplexArithmeticAndAgreesWithTheInterio
   EXPECT_GT(climbed, 0) << "no instance had a high-rank optimum: the staircase was not exercised";
 }
 
+// A complex-form cost whose optimum has a rank the automatic staircase does not climb to
+// (N = 32: its Newton system is capped at 80 unknowns, so rank 1 only) goes to an interior
+// point (the complex one; the real one when that does not certify), and is certified with a
+// complex certificate (Λ_ii = μ_i I₂, where the real interior point's blocks are general) at the
+// real interior point's optimum.
+TEST(SdpComplexForm, AutomaticCertifiesAHighRankOptimumBeyondTheStaircase) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Eigen::MatrixXd C = fact::sdp::complex_form(noisy_plain_cost(32, seed));
+    const Result r = fact::sdp::solve(C, 2);
+    EXPECT_EQ(r.method_used, Method::interior_point) << r.reason;
+    EXPECT_GT(r.rank, 2);
+    expect_certificate(C, 2, r);
+    for (Eigen::Index i = 0; i < C.rows(); i += 2) {
+      EXPECT_EQ(r.Lambda(i, 1), 0.0);
+      EXPECT_EQ(r.Lambda(i, 0), r.Lambda(i + 1, 1));
+    }
+    Options o;
+    o.method = Method::interior_point;
+    const Result ip = fact::sdp::solve(C, 2, o);  // the real interior point alone, no polish
+    EXPECT_LE(r.dual_bound, ip.objective + 1e-12 * r.scale);  // r's bound holds for ip's feasible X
+    EXPECT_NEAR(r.objective, ip.objective, 1e-7 * std::abs(ip.objective));
+  }
+}
+
 TEST(SdpComplexForm, ExplicitMethodRejectsACostThatIsNotAComplexEmbedding) {
   Options o;
   o.method = Method::complex_low_rank;

@@ -2,7 +2,8 @@
 // stops the interior point at a relative gap of 1e-5, tries a short Newton polish, and resumes
 // the interior point from where it stopped when the polish does not certify. These tests check
 // that the stop happens below the asked gap and that a resumed run ends where one uninterrupted
-// run ends, on the scaled problem (‖C‖_F = 1) the solver passes in.
+// run ends, on the scaled problem (‖C‖_F = 1) the solver passes in. The complex interior point
+// (the N × N Hermitian form of a complex-form cost) is checked against the real one.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +13,7 @@
 
 namespace {
 
+using fact::sdp::detail::ComplexInteriorPointOutcome;
 using fact::sdp::Options;
 using fact::sdp::detail::InteriorPointOutcome;
 using fact::sdp::detail::solve_interior_point;
@@ -65,6 +67,35 @@ TEST(SdpInteriorPoint, NoHandoffGapNeverHandsOff) {
   const InteriorPointOutcome ip = solve_interior_point(C, 2, Options{});
   EXPECT_FALSE(ip.handed_off);
   EXPECT_LT(gap_of(C, ip), 1e-7) << ip.reason;
+}
+
+// The complex interior point on H (the Hermitian form of complex_form(noisy plain cost), scaled):
+// its X is Hermitian PSD with unit diagonal, S = H − diag(y) is PSD, the gap is below the
+// tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H).
+TEST(SdpComplexInteriorPoint, ConvergesToTheRealInteriorPointsOptimumWithAFeasibleDual) {
+  for (int drones : {6, 12, 24}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 3));
+    const Eigen::MatrixXd C = C0 / C0.norm();
+    const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C);
+    const Options o;
+    const ComplexInteriorPointOutcome ip = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
+    EXPECT_FALSE(ip.handed_off);
+    EXPECT_LT((ip.X - ip.X.adjoint()).norm(), 1e-12);
+    EXPECT_LT((ip.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(ip.X).eigenvalues().minCoeff(), -1e-12);
+    Eigen::MatrixXcd S = H;  // H − diag(y), N × N
+    S.diagonal() -= ip.y.cast<std::complex<double>>();
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(S).eigenvalues().minCoeff(), -1e-12);
+    const double primal = (H.array() * ip.X.array().conjugate()).real().sum(), dual = ip.y.sum();
+    EXPECT_LT((primal - dual) / std::max({0.5e-4, std::abs(primal), std::abs(dual)}), o.gap_tol) << ip.reason;
+    const InteriorPointOutcome real = solve_interior_point(C, 2, o);
+    EXPECT_NEAR(2 * primal, C.cwiseProduct(real.X).sum(), 1e-8);
+
+    const ComplexInteriorPointOutcome early = fact::sdp::detail::solve_complex_interior_point(H, o, 1e-5);
+    EXPECT_TRUE(early.handed_off) << early.reason;
+    EXPECT_LT(early.iterations, ip.iterations);
+  }
 }
 
 }  // namespace

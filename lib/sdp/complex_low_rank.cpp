@@ -31,15 +31,15 @@ constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 // Every matrix of one Newton run at rank p, allocated once. N rows, t = 2p − 1.
 struct ComplexWorkspace {
   ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
-      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), W(N * t, N * t), Hm(N * t, N * t), llt(N * t),
+      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p), Hm(N * t, N * t), llt(N * t),
         g(N * t), eta(N * t), next(N, p), next_HY(N, p) {}
   MatrixXcd HY;     // H Y, N × p
   VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
   MatrixXcd S;      // H − diag(μ), N × N
   MatrixXcd SY;     // S Y, N × p
   MatrixXcd basis;  // row i·t + a: tangent direction a of row i (a p-vector), N·t × p
-  MatrixXcd W;      // conj(basis) basisᵀ: inner products of every pair of directions, N·t × N·t
-  MatrixXd Hm;      // Hessian in the bases: 2 Re(S_ij W_(ia)(jb)), N·t × N·t
+  MatrixXcd scaled;  // row block j of basis times 2·S_ij for the current block row i, N·t × p
+  MatrixXd Hm;      // Hessian in the bases: 2 Re(S_ij ⟨b_ia, b_jb⟩), ⟨u, v⟩ = conj(u)·vᵀ, N·t × N·t
   Eigen::LLT<MatrixXd> llt;  // factor of Hm + μ_LM I
   VectorXd g;       // gradient coefficients 2 Re⟨b_ia, (S Y)_i⟩, N·t
   VectorXd eta;     // Newton step coefficients, N·t
@@ -72,14 +72,16 @@ void tangent_bases(const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
   }
 }
 
-// Hm = 2 Re(S_ij · W_(ia)(jb)) with W = conj(basis) basisᵀ.
+// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ), one block row i at a time: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ)
+// with B_i row block i of basis (t × p) and K_i = basis with row block j scaled by 2 S_ij (N·t × p).
+// Only the blocks j ≤ i are written: the factorisation reads the lower triangle.
 void hessian(Eigen::Index N, int t, ComplexWorkspace& ws) {
-  ws.W.noalias() = ws.basis.conjugate() * ws.basis.transpose();
-  for (Eigen::Index j = 0; j < N; ++j)
-    for (Eigen::Index i = 0; i < N; ++i) {
-      const std::complex<double> s = 2.0 * ws.S(i, j);
-      ws.Hm.block(i * t, j * t, t, t) = (s * ws.W.block(i * t, j * t, t, t).array()).real();
-    }
+  for (Eigen::Index i = 0; i < N; ++i) {
+    const Eigen::Index width = (i + 1) * t;
+    for (Eigen::Index j = 0; j <= i; ++j) ws.scaled.middleRows(j * t, t) = (2.0 * ws.S(i, j)) * ws.basis.middleRows(j * t, t);
+    ws.Hm.block(i * t, 0, t, width).noalias() =
+        (ws.basis.middleRows(i * t, t).conjugate() * ws.scaled.topRows(width).transpose()).real();
+  }
 }
 
 // ws.next = rows of Y moved by η and normalised; returns f(next) (ws.next_HY = H next).
@@ -177,17 +179,23 @@ Eigen::MatrixXcd escape(const MatrixXcd& H, const MatrixXcd& Y, const MatrixXcd&
 
 }  // namespace
 
-ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
+ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Eigen::VectorXd mu, int iterations,
+                               bool want_vectors) {
   ComplexOutcome out;
   out.Y = std::move(Y);
   out.iterations = iterations;
-  out.mu = (H * out.Y).cwiseProduct(out.Y.conjugate()).real().rowwise().sum();
+  out.mu = std::move(mu);
   MatrixXcd S = H;  // H − diag(μ), N × N
   S.diagonal() -= out.mu.cast<std::complex<double>>();
   Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(S, want_vectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
   out.eigenvalues = eig.eigenvalues();
   if (want_vectors) out.eigenvectors = eig.eigenvectors();
   return out;
+}
+
+ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
+  Eigen::VectorXd mu = (H * Y).cwiseProduct(Y.conjugate()).real().rowwise().sum();
+  return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
 ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns) {
@@ -215,10 +223,15 @@ Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X) {
   for (Eigen::Index j = 0; j < N; ++j)
     for (Eigen::Index i = 0; i < N; ++i)
       Z(i, j) = {0.5 * (X(2 * i, 2 * j) + X(2 * i + 1, 2 * j + 1)), 0.5 * (X(2 * i + 1, 2 * j) - X(2 * i, 2 * j + 1))};
+  return complex_factor(Z, 1e-6);
+}
+
+Eigen::MatrixXcd complex_factor(const Eigen::MatrixXcd& Z, double cutoff) {
+  const Eigen::Index N = Z.rows();
   const Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(Z);
   const Eigen::VectorXd& values = eig.eigenvalues();  // ascending
   Eigen::Index p = 0;
-  while (p < N && values[N - 1 - p] > 1e-6 * values[N - 1]) ++p;
+  while (p < N && values[N - 1 - p] > cutoff * values[N - 1]) ++p;
   MatrixXcd Y(N, std::max<Eigen::Index>(p, 1));
   for (Eigen::Index k = 0; k < Y.cols(); ++k)
     Y.col(k) = eig.eigenvectors().col(N - 1 - k) * std::sqrt(std::max(0.0, values[N - 1 - k]));

@@ -86,6 +86,36 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   return V * small.eigenvectors().leftCols(k);
 }
 
+// The lowest Ritz value of a self-adjoint operator (n × n, real or complex: Vector is VectorXd or
+// VectorXcd) after at most `steps` Lanczos steps with full reorthogonalisation, from a fixed start
+// near the all-ones vector; apply(v, w) writes w = B v. Ritz values lie inside the spectrum, so the
+// estimate is ≥ λ_min(B): the step lengths that use it confirm the step with a Cholesky test.
+template <class Vector, class Apply>
+double lanczos_lowest(Eigen::Index n, int steps, Apply apply) {
+  using Basis = Eigen::Matrix<typename Vector::Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  const int k = static_cast<int>(std::min<Eigen::Index>(steps, n));
+  Basis V(n, k);  // Lanczos basis, n × k
+  Eigen::VectorXd alpha(k), beta(k);
+  Vector v(n), w(n);
+  const double flat = 1.0 / std::sqrt(static_cast<double>(n));
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = flat + 1e-3 * std::sin(1.0 + 7.0 * i);  // avoid symmetric starts
+  v.normalize();
+  int done = 0;
+  for (int j = 0; j < k; ++j) {
+    V.col(j) = v;
+    apply(v, w);
+    alpha[j] = std::real(v.dot(w));
+    for (int pass = 0; pass < 2; ++pass) w -= V.leftCols(j + 1) * (V.leftCols(j + 1).adjoint() * w);
+    beta[j] = w.norm();
+    done = j + 1;
+    if (beta[j] < 1e-12) break;
+    v = w / beta[j];
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> tri;  // of the tridiagonal Lanczos matrix, done × done
+  tri.computeFromTridiagonal(alpha.head(done), beta.head(std::max(done - 1, 0)), Eigen::EigenvaluesOnly);
+  return tri.eigenvalues()(0);
+}
+
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
 // leaving the rest untouched, at the first block with no direction (all zero).
 bool project_blocks(Eigen::MatrixXd& Y, int d);
@@ -151,11 +181,32 @@ struct ComplexOutcome {
 
 // The multipliers and the spectrum of S = H − diag(μ) at Y (eigenvectors with want_vectors).
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors);
+// The same for given multipliers μ (the complex interior point's dual y).
+ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Eigen::VectorXd mu, int iterations,
+                               bool want_vectors);
 
 // A complex factor (N × p, unit rows) of the Hermitian Z whose embedding is nearest to X
 // (2N × 2N, the K-average of X's blocks): Z's eigenvectors of eigenvalues above 1e-6 of the
 // largest, scaled by √eigenvalue, rows then normalised. The interior point's handoff to Newton.
 Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X);
+
+// The same from a Hermitian Z (N × N) directly, keeping the eigenvalues above cutoff × the largest.
+Eigen::MatrixXcd complex_factor(const Eigen::MatrixXcd& Z, double cutoff);
+
+struct ComplexInteriorPointOutcome {
+  Eigen::MatrixXcd X;       // N × N Hermitian primal, unit diagonal
+  Eigen::VectorXd y;        // N dual multipliers: S = H − diag(y)
+  int iterations = 0;
+  bool converged = false;   // relative gap below 0.1·gap_tol
+  bool handed_off = false;  // stopped at the handoff gap, before convergence
+  std::string reason;       // why it stopped when not converged
+};
+
+// Primal–dual path following on the Hermitian N × N problem min Re tr(H X), X_ii = 1, X ⪰ 0
+// (complex_interior_point.cpp), HKM direction and Mehrotra corrector, stopping once the
+// relative gap is below handoff_gap (> 0: handed_off is set).
+ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
+                                                         double handoff_gap);
 
 // The certificate of the d = 2 problem on emb(H): Λ_ii = μ_i I₂, and S = emb(H − diag μ) has
 // every eigenvalue of H − diag μ twice.

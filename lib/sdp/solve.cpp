@@ -41,6 +41,10 @@ constexpr int kComplexMaxUnknowns = 80;
 // alone leaves at a gap of 4e-7.
 constexpr int kComplexPolishSteps = 4;
 constexpr int kMaxComplexPolishSize = 3000;
+// The complex interior point's X is factored at the eigenvalues above this fraction of the
+// largest: at convergence the rest are rounding, and dropping them keeps the factor's rank that
+// of the optimum.
+constexpr double kComplexFactorCutoff = 1e-10;
 
 struct Candidate {
   Eigen::MatrixXd Y;      // n × r factor of X
@@ -101,15 +105,31 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   return candidate_of(C, detail::solve_complex_low_rank(detail::hermitian_of(C), o, max_unknowns), Method::complex_low_rank);
 }
 
-// Newton in complex arithmetic from the interior point's X (complex form only), at the rank of
-// X's K-average, for at most max_steps steps; nullopt when its system would exceed
+// Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
+// (complex form only) for at most max_steps steps; nullopt when its system would exceed
 // kMaxComplexPolishSize.
-std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXd& X, int iterations, int max_steps) {
-  Eigen::MatrixXcd Y = detail::complex_factor_of(X);
+std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int iterations, int max_steps) {
   if (Y.rows() * (2 * Y.cols() - 1) > kMaxComplexPolishSize) return std::nullopt;
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
+}
+
+// The complex interior point on H (complex form, automatic mode), run to convergence. Its dual y
+// keeps S = H − diag(y) positive definite and its X (factored at the eigenvalues above
+// kComplexFactorCutoff of the largest, rows renormalised) is feasible, so the pair certifies
+// without a polish; when the interior point stops short of the gap, complex Newton from its X
+// gets kComplexPolishSteps steps.
+Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o) {
+  const Eigen::MatrixXcd H = detail::hermitian_of(C);
+  const detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, 0.0);
+  Candidate c = candidate_of(C, detail::complex_outcome(H, detail::complex_factor(ip.X, kComplexFactorCutoff), ip.y,
+                                                        ip.iterations, false),
+                             Method::interior_point);
+  c.note = ip.reason;
+  if (is_certified(c, o)) return c;
+  std::optional<Candidate> polished = complex_polish(C, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
+  return polished && is_certified(*polished, o) ? *polished : c;
 }
 
 Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPointOutcome& ip) {
@@ -171,7 +191,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
   if (complex_form) {
-    polished = complex_polish(C, ip.X, ip.iterations, kComplexPolishSteps);
+    polished = complex_polish(C, detail::complex_factor_of(ip.X), ip.iterations, kComplexPolishSteps);
   } else {
     Candidate handed;  // only the factor: polish certifies its own result
     handed.Y = detail::factor_psd(ip.X, 0.0);
@@ -246,7 +266,11 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     best = from_low_rank(Cs, d, options);
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(best, options))) {
-    Candidate ip = from_interior_point(Cs, d, options, complex_form);
+    // Complex form: the N × N complex interior point first, the 2N × 2N real one when it does
+    // not certify.
+    Candidate ip;
+    if (complex_form) ip = from_complex_interior_point(Cs, options);
+    if (!complex_form || !is_certified(ip, options)) ip = from_interior_point(Cs, d, options, complex_form);
     ip.iterations += best.iterations;
     if (options.method == Method::automatic && !is_certified(ip, options)) {
       std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60);

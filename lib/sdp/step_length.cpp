@@ -3,6 +3,8 @@
 // triangular solves and tridiagonalisation spend most of their time on overhead.
 #include "step_length.h"
 
+#include "internal.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -213,33 +215,12 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
 // Smallest eigenvalue estimate of L⁻¹ Δ L⁻ᵀ by Lanczos (24 steps, full reorthogonalisation).
 // Ritz values lie inside the spectrum, so the caller verifies the step with a Cholesky test.
 double StepLength::lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta) {
-  const Eigen::Index n = delta.rows();
-  const int k = static_cast<int>(std::min<Eigen::Index>(24, n));
-  Eigen::MatrixXd V(n, k);  // Lanczos basis, n × k
-  Eigen::VectorXd alpha(k), beta(k);
-  Eigen::VectorXd v = Eigen::VectorXd::Ones(n) / std::sqrt(static_cast<double>(n));
-  for (Eigen::Index i = 0; i < n; ++i) v[i] += 1e-3 * std::sin(1.0 + 7.0 * i);  // avoid symmetric starts
-  v.normalize();
-  int steps = 0;
-  for (int j = 0; j < k; ++j) {
-    V.col(j) = v;
-    Eigen::VectorXd w = L.triangularView<Eigen::Lower>().transpose().solve(v);  // L⁻ᵀ v
+  const auto lower = L.triangularView<Eigen::Lower>();
+  return lanczos_lowest<Eigen::VectorXd>(delta.rows(), 24, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+    w = lower.transpose().solve(v);  // L⁻ᵀ v
     w = delta * w;
-    L.triangularView<Eigen::Lower>().solveInPlace(w);                        // L⁻¹ Δ L⁻ᵀ v
-    alpha[j] = v.dot(w);
-    w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
-    w -= V.leftCols(j + 1) * (V.leftCols(j + 1).transpose() * w);
-    beta[j] = w.norm();
-    steps = j + 1;
-    if (beta[j] < 1e-12) break;
-    v = w / beta[j];
-  }
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(steps, steps);  // tridiagonal Lanczos matrix
-  for (int j = 0; j < steps; ++j) {
-    T(j, j) = alpha[j];
-    if (j + 1 < steps) T(j, j + 1) = T(j + 1, j) = beta[j];
-  }
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues()(0);
+    lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v
+  });
 }
 
 bool StepLength::positive_definite() {

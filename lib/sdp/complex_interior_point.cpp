@@ -1,0 +1,220 @@
+// Primal–dual interior point for the complex form:  min Re tr(H X)  s.t.  X_ii = 1,  X ⪰ 0,
+// X Hermitian N × N (H Hermitian N × N, the scaled C = emb(H)). Its dual is  max Σ y_i  s.t.
+// Z = H − diag(y) ⪰ 0, y real. The d = 2 problem on emb(H) has the same optimum at emb(X) with
+// Λ_ii = y_i I₂, so this is the same relaxation in N×N complex arithmetic instead of 2N × 2N real
+// with 3N constraints: the Schur complement is N × N, against 3N × 3N.
+//
+// Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1), HKM direction,
+// Mehrotra predictor–corrector. With A(X)_i = Re X_ii and Aᵀ(y) = diag(y), ΔZ = −diag(Δy) is
+// diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)),
+// W = Z⁻¹ (N × N real symmetric).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "internal.h"
+
+namespace fact::sdp::detail {
+namespace {
+
+using Eigen::MatrixXcd;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// Every matrix of one iteration, allocated once (N × N complex unless noted).
+struct Workspace {
+  explicit Workspace(Eigen::Index N)
+      : chol_x(N), chol_z(N), test(N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
+        trial(N, N), u(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
+  Eigen::LLT<MatrixXcd> chol_x, chol_z;  // X = Lx Lxᴴ, Z = Lz Lzᴴ
+  Eigen::LLT<MatrixXcd> test;            // Cholesky test of a trial step
+  MatrixXcd Lz_inv;                      // Lz⁻¹ (lower triangular)
+  MatrixXcd W;                           // Z⁻¹
+  MatrixXd M;                            // Schur complement, N × N real
+  Eigen::LLT<MatrixXd> chol_m;
+  MatrixXcd P;                           // scratch product, multiplied by W
+  MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
+  MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
+  Eigen::VectorXcd u;                    // Lanczos scratch vector, N
+  VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
+};
+
+// Hermitian part in place: A ← (A + Aᴴ)/2.
+void hermitian_part(MatrixXcd& A) {
+  const Eigen::Index N = A.rows();
+  for (Eigen::Index j = 0; j < N; ++j) {
+    A(j, j) = A(j, j).real();
+    for (Eigen::Index i = j + 1; i < N; ++i) {
+      const std::complex<double> v = 0.5 * (A(i, j) + std::conj(A(j, i)));
+      A(i, j) = v;
+      A(j, i) = std::conj(v);
+    }
+  }
+}
+
+// Lanczos steps of the step-length estimate.
+constexpr int kLanczosSteps = 24;
+
+// min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
+// Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
+// Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it passes.
+template <class ApplyDelta, class FormTrial>
+double step_length(const Eigen::LLT<MatrixXcd>& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
+                   FormTrial form_trial) {
+  const auto L = chol.matrixL();
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
+                                                         [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+                                                           ws.u = L.adjoint().solve(v);  // L⁻ᴴ v
+                                                           apply_delta(ws.u, w);
+                                                           L.solveInPlace(w);  // L⁻¹ Δ L⁻ᴴ v
+                                                         });
+  double alpha = lowest >= 0 ? 1.0 : std::min(1.0, -tau / lowest);
+  if (tau >= 1.0) return alpha;  // the predictor's step only sets σ
+  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
+    form_trial(alpha);
+    ws.test.compute(ws.trial);
+    if (ws.test.info() == Eigen::Success) return alpha;
+  }
+  return 0.0;
+}
+
+// The step for X + α ΔX.
+double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, double tau) {
+  return step_length(
+      ws.chol_x, tau, ws, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w.noalias() = dx * u; },
+      [&](double a) { ws.trial = X + a * dx; });
+}
+
+// The step for Z + α ΔZ with ΔZ = −diag(Δy).
+double dual_step(const MatrixXcd& Z, const VectorXd& dy, Workspace& ws, double tau) {
+  return step_length(
+      ws.chol_z, tau, ws, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w = -(dy.array() * u.array()).matrix(); },
+      [&](double a) {
+        ws.trial = Z;
+        ws.trial.diagonal() -= (a * dy).cast<std::complex<double>>();
+      });
+}
+
+// ΔX = herm(σμW − X − P Z⁻¹) for the P already in ws.P; P Z⁻¹ by two triangular solves with Z's
+// factor, not a product with W: near the optimum W's entries grow as 1/μ and the product loses
+// the digits the last iterations need (with it the gap stalls at 1e-7 … 1e-8 on tight_noisy).
+void primal_direction(const MatrixXcd& X, double sigma_mu, Workspace& ws, MatrixXcd& dx) {
+  dx = -ws.chol_z.solve(ws.P.adjoint()).adjoint();  // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
+  dx -= X;
+  if (sigma_mu != 0) dx += sigma_mu * ws.W;
+  hermitian_part(dx);
+}
+
+// Re tr((X + a ΔX)(Z + b ΔZ)) with ΔZ = −diag(dy).
+double complementarity_after(const MatrixXcd& X, const MatrixXcd& dx, double a, const MatrixXcd& Z, const VectorXd& dy,
+                             double b) {
+  const MatrixXcd Xa = X + a * dx;
+  return (Xa.array() * Z.array().conjugate()).real().sum() - b * Xa.diagonal().real().dot(dy);
+}
+
+}  // namespace
+
+ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
+                                                         double handoff_gap) {
+  const Eigen::Index N = H.rows();
+  ComplexInteriorPointOutcome out;
+  Workspace ws(N);
+  MatrixXcd X = MatrixXcd::Identity(N, N);  // primal, N × N Hermitian
+  VectorXd y = VectorXd::Constant(N, -2.0);  // dual, N
+  MatrixXcd Z = H;                           // dual slack H − diag(y), N × N
+  Z.diagonal() -= y.cast<std::complex<double>>();
+  const double tau = 0.95;
+  double best_gap = std::numeric_limits<double>::infinity(), best_rel_gap = best_gap, halved_gap = best_gap;
+  MatrixXcd best_X = X;
+  VectorXd best_y = y;
+  int stalled = 0;
+  for (int it = 0; it < options.max_ipm_iterations; ++it) {
+    out.iterations = it + 1;
+    const double primal = (H.array() * X.array().conjugate()).real().sum(), dual = y.sum();
+    const double gap = (X.array() * Z.array().conjugate()).real().sum();
+    // The d = 2 problem's objective is twice this one's: the same floor as its relative gap.
+    const double rel_gap = gap / std::max({0.5e-4, std::abs(primal), std::abs(dual)});
+    const bool grew = gap >= best_gap;
+    if (!grew) {
+      best_gap = gap;
+      best_rel_gap = rel_gap;
+      best_X = X;
+      best_y = y;
+    }
+    if (rel_gap < 0.1 * options.gap_tol) {
+      out.converged = true;
+      break;
+    }
+    if (rel_gap < handoff_gap && !grew) {
+      out.handed_off = true;
+      out.reason = "handed off at relative gap " + std::to_string(rel_gap);
+      break;
+    }
+    if (gap < 0.5 * halved_gap) {
+      halved_gap = gap;
+      stalled = 0;
+    } else {
+      ++stalled;
+    }
+    if ((grew && best_rel_gap < 1e-6) || stalled >= 4) {
+      std::ostringstream why;
+      why << "complex interior point stalled at relative gap " << best_rel_gap << " after " << it + 1 << " iterations";
+      out.reason = why.str();
+      break;
+    }
+    const double mu = gap / static_cast<double>(N);
+    ws.chol_z.compute(Z);
+    ws.chol_x.compute(X);
+    if (ws.chol_z.info() != Eigen::Success || ws.chol_x.info() != Eigen::Success) {
+      out.reason = "complex interior point lost positive definiteness at iteration " + std::to_string(it);
+      break;
+    }
+    ws.Lz_inv = ws.chol_z.matrixL().solve(MatrixXcd::Identity(N, N));
+    ws.W.noalias() = ws.Lz_inv.adjoint() * ws.Lz_inv;  // Z⁻¹
+    ws.M = (X.array() * ws.W.array().conjugate()).real();
+    ws.chol_m.compute(ws.M);
+    if (ws.chol_m.info() != Eigen::Success) {
+      out.reason = "complex Schur complement not positive definite at iteration " + std::to_string(it);
+      break;
+    }
+    // Predictor (σ = 0): M Δy = A(X) = 1; ΔX = −X − X ΔZ W with X ΔZ = −X diag(Δy).
+    ws.dy_aff = ws.chol_m.solve(ws.ones);
+    ws.P.noalias() = -X * ws.dy_aff.asDiagonal();
+    primal_direction(X, 0.0, ws, ws.dx_aff);
+    const double ap_aff = primal_step(X, ws.dx_aff, ws, 1.0);
+    const double ad_aff = dual_step(Z, ws.dy_aff, ws, 1.0);
+    const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dy_aff, ad_aff) / static_cast<double>(N);
+    const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
+    // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
+    ws.P.noalias() = -ws.dx_aff * ws.dy_aff.asDiagonal();  // ΔX_a ΔZ_a
+    for (Eigen::Index i = 0; i < N; ++i) {
+      const double pw_ii = ws.P.row(i).transpose().cwiseProduct(ws.W.col(i)).sum().real();  // Re (P W)_ii
+      ws.rhs[i] = pw_ii - (sigma * mu * ws.W(i, i).real() - X(i, i).real());
+    }
+    ws.dy = ws.chol_m.solve(ws.rhs);
+    ws.P.noalias() -= X * ws.dy.asDiagonal();  // + X ΔZ
+    primal_direction(X, sigma * mu, ws, ws.dx);
+    const double ap = primal_step(X, ws.dx, ws, tau);
+    const double ad = dual_step(Z, ws.dy, ws, tau);
+    if (ap == 0.0 && ad == 0.0) {
+      out.reason = "complex interior point stalled at iteration " + std::to_string(it);
+      break;
+    }
+    X += ap * ws.dx;
+    y += ad * ws.dy;
+    Z = H;
+    Z.diagonal() -= y.cast<std::complex<double>>();
+  }
+  X = best_X;
+  // Undo rounding drift: X ← D^{-1/2} X D^{-1/2}, D = diag(X), so the diagonal is 1 again.
+  const VectorXd root = X.diagonal().real().cwiseSqrt().cwiseInverse();
+  X = root.asDiagonal() * X * root.asDiagonal();
+  if (!out.converged && out.reason.empty())
+    out.reason = "complex interior point reached " + std::to_string(options.max_ipm_iterations) + " iterations";
+  out.X = std::move(X);
+  out.y = best_y;
+  return out;
+}
+
+}  // namespace fact::sdp::detail
