@@ -7,7 +7,8 @@
 // Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1), HKM direction,
 // Mehrotra predictor–corrector. With A(X)_i = Re X_ii and Aᵀ(y) = diag(y), ΔZ = −diag(Δy) is
 // diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)),
-// W = Z⁻¹ (N × N real symmetric).
+// W = Z⁻¹ (N × N real symmetric). Step lengths come from a Lanczos estimate of the boundary,
+// confirmed by a Cholesky test (the real path's exact Sturm bracketing has no complex version).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -53,8 +54,11 @@ void hermitian_part(MatrixXcd& A) {
   }
 }
 
-// Lanczos steps of the step-length estimate.
+// Lanczos steps of the step-length estimate: 24 for the corrector, 8 for the predictor, whose
+// step only sets the centring σ (on tight_noisy N = 12 … 100 the iterations did not change, and
+// the interior point took 15–30 % less time than with 24).
 constexpr int kLanczosSteps = 24;
+constexpr int kPredictorLanczosSteps = 8;
 
 // min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
 // Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
@@ -63,7 +67,8 @@ template <class ApplyDelta, class FormTrial>
 double step_length(const Eigen::LLT<MatrixXcd>& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
                    FormTrial form_trial) {
   const auto L = chol.matrixL();
-  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
+  const int steps = tau >= 1.0 ? kPredictorLanczosSteps : kLanczosSteps;
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), steps,
                                                          [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
                                                            ws.u = L.adjoint().solve(v);  // L⁻ᴴ v
                                                            apply_delta(ws.u, w);

@@ -28,17 +28,25 @@ using Eigen::VectorXd;
 constexpr std::complex<double> kI{0.0, 1.0};
 constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 
+// Largest Newton system whose Hessian is built from the whole Gram matrix conj(basis) basisᵀ in
+// one product; above it, block row by block row, which needs no N·t × N·t complex matrix (13 MB,
+// cleared by the product, at N = 100, p = 5) but makes N small products, slower at small N
+// (BENCHMARKS.md, session 12).
+constexpr Eigen::Index kGramHessianMaxSize = 256;
+
 // Every matrix of one Newton run at rank p, allocated once. N rows, t = 2p − 1.
 struct ComplexWorkspace {
   ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
-      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p), Hm(N * t, N * t), llt(N * t),
-        g(N * t), eta(N * t), next(N, p), next_HY(N, p) {}
+      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p),
+        gram(N * t <= kGramHessianMaxSize ? N * t : 0, N * t <= kGramHessianMaxSize ? N * t : 0), Hm(N * t, N * t),
+        llt(N * t), g(N * t), eta(N * t), next(N, p), next_HY(N, p) {}
   MatrixXcd HY;     // H Y, N × p
   VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
   MatrixXcd S;      // H − diag(μ), N × N
   MatrixXcd SY;     // S Y, N × p
   MatrixXcd basis;  // row i·t + a: tangent direction a of row i (a p-vector), N·t × p
   MatrixXcd scaled;  // row block j of basis times 2·S_ij for the current block row i, N·t × p
+  MatrixXcd gram;    // conj(basis) basisᵀ, N·t × N·t when N·t ≤ kGramHessianMaxSize, else empty
   MatrixXd Hm;      // Hessian in the bases: 2 Re(S_ij ⟨b_ia, b_jb⟩), ⟨u, v⟩ = conj(u)·vᵀ, N·t × N·t
   Eigen::LLT<MatrixXd> llt;  // factor of Hm + μ_LM I
   VectorXd g;       // gradient coefficients 2 Re⟨b_ia, (S Y)_i⟩, N·t
@@ -72,10 +80,17 @@ void tangent_bases(const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
   }
 }
 
-// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ), one block row i at a time: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ)
-// with B_i row block i of basis (t × p) and K_i = basis with row block j scaled by 2 S_ij (N·t × p).
-// Only the blocks j ≤ i are written: the factorisation reads the lower triangle.
+// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ). Block row by block row: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ) with
+// B_i row block i of basis (t × p) and K_i = basis with row block j scaled by 2 S_ij (N·t × p),
+// only the blocks j ≤ i (the factorisation reads the lower triangle).
 void hessian(Eigen::Index N, int t, ComplexWorkspace& ws) {
+  if (N * t <= kGramHessianMaxSize) {
+    ws.gram.noalias() = ws.basis.conjugate() * ws.basis.transpose();
+    for (Eigen::Index j = 0; j < N; ++j)
+      for (Eigen::Index i = j; i < N; ++i)
+        ws.Hm.block(i * t, j * t, t, t) = ((2.0 * ws.S(i, j)) * ws.gram.block(i * t, j * t, t, t).array()).real();
+    return;
+  }
   for (Eigen::Index i = 0; i < N; ++i) {
     const Eigen::Index width = (i + 1) * t;
     for (Eigen::Index j = 0; j <= i; ++j) ws.scaled.middleRows(j * t, t) = (2.0 * ws.S(i, j)) * ws.basis.middleRows(j * t, t);
