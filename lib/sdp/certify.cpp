@@ -1,6 +1,7 @@
 // Certification: the dual certificate Λ, S = C − Λ and its spectrum.
 #include <algorithm>
 #include <limits>
+#include <sstream>
 
 #include "internal.h"
 
@@ -47,6 +48,35 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
   for (Eigen::Index i = 0; i < C.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
   bound_from_spectrum(cert);
   return cert;
+}
+
+GapRule::Verdict GapRule::next(double gap, double rel_gap, bool& improved) {
+  const bool grew = gap >= best_gap_;
+  improved = !grew;
+  if (improved) {
+    best_gap_ = gap;
+    best_rel_gap_ = rel_gap;
+  }
+  if (rel_gap < 0.1 * gap_tol_) return last_ = Verdict::converged;
+  if (rel_gap < handoff_gap_ && improved) return last_ = Verdict::handed_off;
+  if (gap < 0.5 * halved_gap_) {
+    halved_gap_ = gap;
+    stalled_ = 0;
+  } else {
+    ++stalled_;
+  }
+  // Rounding now limits the last digits: the gap grew near the end, or has not halved in 4 iterations.
+  if ((grew && best_rel_gap_ < 1e-6) || stalled_ >= 4) return last_ = Verdict::stalled;
+  return last_ = Verdict::go_on;
+}
+
+std::string GapRule::reason(const char* solver, int iterations) const {
+  std::ostringstream why;
+  if (last_ == Verdict::handed_off)
+    why << "handed off at relative gap " << best_rel_gap_;
+  else
+    why << solver << " stalled at relative gap " << best_rel_gap_ << " after " << iterations << " iterations";
+  return why.str();
 }
 
 }  // namespace fact::sdp::detail

@@ -130,44 +130,22 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   MatrixXcd Z = H;                           // dual slack H − diag(y), N × N
   Z.diagonal() -= y.cast<std::complex<double>>();
   const double tau = 0.95;
-  double best_gap = std::numeric_limits<double>::infinity(), best_rel_gap = best_gap, halved_gap = best_gap;
+  GapRule rule(options.gap_tol, handoff_gap);  // the iterate with the smallest gap so far is kept
   MatrixXcd best_X = X;
   VectorXd best_y = y;
-  int stalled = 0;
   for (int it = 0; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1;
     const double primal = (H.array() * X.array().conjugate()).real().sum(), dual = y.sum();
     const double gap = (X.array() * Z.array().conjugate()).real().sum();
     // The d = 2 problem's objective is twice this one's: the same floor as its relative gap.
     const double rel_gap = gap / std::max({0.5e-4, std::abs(primal), std::abs(dual)});
-    const bool grew = gap >= best_gap;
-    if (!grew) {
-      best_gap = gap;
-      best_rel_gap = rel_gap;
+    bool improved = false;
+    const GapRule::Verdict verdict = rule.next(gap, rel_gap, improved);
+    if (improved) {
       best_X = X;
       best_y = y;
     }
-    if (rel_gap < 0.1 * options.gap_tol) {
-      out.converged = true;
-      break;
-    }
-    if (rel_gap < handoff_gap && !grew) {
-      out.handed_off = true;
-      out.reason = "handed off at relative gap " + std::to_string(rel_gap);
-      break;
-    }
-    if (gap < 0.5 * halved_gap) {
-      halved_gap = gap;
-      stalled = 0;
-    } else {
-      ++stalled;
-    }
-    if ((grew && best_rel_gap < 1e-6) || stalled >= 4) {
-      std::ostringstream why;
-      why << "complex interior point stalled at relative gap " << best_rel_gap << " after " << it + 1 << " iterations";
-      out.reason = why.str();
-      break;
-    }
+    if (rule.stops(verdict, "complex interior point", it + 1, out)) break;
     const double mu = gap / static_cast<double>(N);
     ws.chol_z.compute(Z);
     ws.chol_x.compute(X);

@@ -146,48 +146,23 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   certificate_matrix(C, lambda, d, Z);
   const double tau = 0.95;
 
-  // The iterate with the smallest gap so far: once rounding limits the last digits the gap
-  // can grow again, and the polish in solve.cpp starts from the best iterate.
-  double best_gap = std::numeric_limits<double>::infinity(), best_rel_gap = best_gap;
+  // The iterate with the smallest gap so far (GapRule): the polish in solve.cpp starts from it.
+  GapRule rule(options.gap_tol, handoff_gap);
   Eigen::MatrixXd best_X = X;  // n × n
   Eigen::VectorXd best_y = y;  // m
-  double halved_gap = best_gap;
-  int stalled = 0;  // iterations since the gap last halved
   const int done = resume ? resume->iterations : 0;  // iterations the resumed run already took
   for (int it = done; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1 - done;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
     const double gap = X.cwiseProduct(Z).sum();
     const double rel_gap = gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
-    const bool grew = gap >= best_gap;
-    if (!grew) {
-      best_gap = gap;
-      best_rel_gap = rel_gap;
+    bool improved = false;
+    const GapRule::Verdict verdict = rule.next(gap, rel_gap, improved);
+    if (improved) {
       best_X = X;
       best_y = y;
     }
-    if (rel_gap < 0.1 * options.gap_tol) {
-      out.converged = true;
-      break;
-    }
-    if (rel_gap < handoff_gap && !grew) {
-      out.handed_off = true;
-      out.reason = "handed off at relative gap " + std::to_string(rel_gap);
-      break;
-    }
-    if (gap < 0.5 * halved_gap) {
-      halved_gap = gap;
-      stalled = 0;
-    } else {
-      ++stalled;
-    }
-    // Rounding now limits the last digits: the gap grew near the end, or has not halved in 4 iterations.
-    if ((grew && best_rel_gap < 1e-6) || stalled >= 4) {
-      std::ostringstream why;
-      why << "interior point stalled at relative gap " << best_rel_gap << " after " << it + 1 << " iterations";
-      out.reason = why.str();
-      break;
-    }
+    if (rule.stops(verdict, "interior point", it + 1, out)) break;
     const double mu = gap / n;
     if (!factorize(X, Z, exact_steps, ws)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);

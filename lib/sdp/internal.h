@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "fact/sdp.h"
 
@@ -133,6 +134,36 @@ struct LowRankOutcome {
 // Riemannian staircase: block-coordinate minimisation at rank r, certify, and if S has a
 // negative eigenvalue, add a column along its eigenvector and continue, up to max_rank.
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options);
+
+// The stopping rules both interior points share. Each iteration's gap goes through next(); the
+// iterate with the smallest gap so far is the one to keep (once rounding limits the last digits
+// the gap can grow again). The interior point has converged below 0.1·gap_tol, hands off below
+// handoff_gap (an improving iterate only), and has stalled when the gap grew after reaching 1e-6
+// or has not halved in 4 iterations; reason() then says why.
+class GapRule {
+ public:
+  enum class Verdict { go_on, converged, handed_off, stalled };
+  GapRule(double gap_tol, double handoff_gap) : gap_tol_(gap_tol), handoff_gap_(handoff_gap) {}
+  // gap = ⟨X, Z⟩, rel_gap relative to the objective; `improved` is set when this iterate is the best.
+  Verdict next(double gap, double rel_gap, bool& improved);
+  std::string reason(const char* solver, int iterations) const;  // for handed_off and stalled
+  // Writes a verdict other than go_on into an interior point's outcome (converged, handed_off,
+  // reason); true when the loop stops.
+  template <class Outcome>
+  bool stops(Verdict verdict, const char* solver, int iterations, Outcome& out) const {
+    if (verdict == Verdict::go_on) return false;
+    out.converged = verdict == Verdict::converged;
+    out.handed_off = verdict == Verdict::handed_off;
+    if (!out.converged) out.reason = reason(solver, iterations);
+    return true;
+  }
+
+ private:
+  double gap_tol_, handoff_gap_;
+  double best_gap_ = std::numeric_limits<double>::infinity(), best_rel_gap_ = best_gap_, halved_gap_ = best_gap_;
+  int stalled_ = 0;  // iterations since the gap last halved
+  Verdict last_ = Verdict::go_on;
+};
 
 struct InteriorPointOutcome {
   Eigen::MatrixXd X;        // n × n primal
