@@ -6,8 +6,8 @@
 //
 // Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1), HKM direction,
 // Mehrotra predictor–corrector. With A(X)_i = Re X_ii and Aᵀ(y) = diag(y), ΔZ = −diag(Δy) is
-// diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)),
-// W = Z⁻¹ (N × N real symmetric). Step lengths come from a Lanczos estimate of the boundary,
+// diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)) (N × N
+// real symmetric), W = Z⁻¹ (N × N Hermitian). Step lengths come from a Lanczos estimate of the boundary,
 // confirmed by a Cholesky test (the real path's exact Sturm bracketing has no complex version).
 #include <algorithm>
 #include <cmath>
@@ -34,7 +34,7 @@ struct Workspace {
   MatrixXcd W;                           // Z⁻¹
   MatrixXd M;                            // Schur complement, N × N real
   Eigen::LLT<MatrixXd> chol_m;
-  MatrixXcd P;                           // scratch product, multiplied by W
+  MatrixXcd P;                           // scratch product, multiplied by Z⁻¹ (primal_direction)
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
   Eigen::VectorXcd u;                    // Lanczos scratch vector, N

@@ -30,8 +30,8 @@ constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 
 // Largest Newton system whose Hessian is built from the whole Gram matrix conj(basis) basisᵀ in
 // one product; above it, block row by block row, which needs no N·t × N·t complex matrix (13 MB,
-// cleared by the product, at N = 100, p = 5) but makes N small products, slower at small N
-// (BENCHMARKS.md, session 12).
+// zeroed by the product and page-faulted on every call, at N = 100, p = 5: BENCHMARKS.md,
+// session 12) but makes N small products, whose per-call overhead the one product avoids at small N.
 constexpr Eigen::Index kGramHessianMaxSize = 256;
 
 // Every matrix of one Newton run at rank p, allocated once. N rows, t = 2p − 1.
