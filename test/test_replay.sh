@@ -48,7 +48,10 @@ phase_record() {
     --incremental --count 4 --interval 0.3 2>"$WORK/publish.log" || fail "fact-rounds-publish failed"
   wait_until 10 has_at_least "$WORK/solver1.log" "estimate:" 3 || fail "the solver did not estimate 3 times"
   wait_until 10 has_at_least "$WORK/original.lcm" FACT_RESULT_1 3 || fail "lcm-logger recorded fewer than 3 results"
-  sleep 0.3  # one more flush interval of the logger
+  # The repeat is published last and flushed up to a flush interval later: stop only once the
+  # file holds it (a fixed sleep lost it once on a loaded machine).
+  wait_until 10 has_at_least "$WORK/original.lcm" FACT_SWARM_ROUNDS_1 4 ||
+    fail "lcm-logger recorded fewer than 4 FACT_SWARM_ROUNDS_1 messages"
   stop $solver $logger
   trap - EXIT
 }
