@@ -54,11 +54,11 @@ void hermitian_part(MatrixXcd& A) {
   }
 }
 
-// Lanczos steps of the step-length estimate: 24 for the corrector, 8 for the predictor, whose
-// step only sets the centring σ (on tight_noisy N = 12 … 100 the iterations did not change, and
-// the interior point took 15–30 % less time than with 24).
-constexpr int kLanczosSteps = 24;
-constexpr int kPredictorLanczosSteps = 8;
+// Lanczos steps of the step-length estimate, predictor and corrector alike. The corrector's step
+// is confirmed by a Cholesky test, which shrinks it when 8 steps overestimate λ_min; with 24 the
+// iterations on tight_noisy N = 32 … 200 were the same and the interior point took 12–30 % longer
+// (BENCHMARKS.md, sessions 12 and 13).
+constexpr int kLanczosSteps = 8;
 
 // min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
 // Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
@@ -67,8 +67,7 @@ template <class ApplyDelta, class FormTrial>
 double step_length(const Eigen::LLT<MatrixXcd>& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
                    FormTrial form_trial) {
   const auto L = chol.matrixL();
-  const int steps = tau >= 1.0 ? kPredictorLanczosSteps : kLanczosSteps;
-  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), steps,
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
                                                          [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
                                                            ws.u = L.adjoint().solve(v);  // L⁻ᴴ v
                                                            apply_delta(ws.u, w);

@@ -39,7 +39,7 @@ struct ComplexWorkspace {
   ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
       : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p),
         gram(N * t <= kGramHessianMaxSize ? N * t : 0, N * t <= kGramHessianMaxSize ? N * t : 0), Hm(N * t, N * t),
-        llt(N * t), g(N * t), eta(N * t), next(N, p), next_HY(N, p) {}
+        llt(N * t), g(N * t), eta(N * t), next(N, p), next_HY(N, p), kept(N, p), kept_HY(N, p) {}
   MatrixXcd HY;     // H Y, N × p
   VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
   MatrixXcd S;      // H − diag(μ), N × N
@@ -53,6 +53,7 @@ struct ComplexWorkspace {
   VectorXd eta;     // Newton step coefficients, N·t
   MatrixXcd next;   // trial factor, N × p
   MatrixXcd next_HY;  // H · next, N × p
+  MatrixXcd kept, kept_HY;  // the accepted trial and H · it while a longer one is tried, N × p
 };
 
 // μ, S and S Y for the current Y (ws.HY = H Y already).
@@ -110,6 +111,26 @@ double trial_step(const MatrixXcd& H, const MatrixXcd& Y, int t, ComplexWorkspac
   return (ws.next_HY.array() * ws.next.array().conjugate()).real().sum();
 }
 
+// Above rank 1, after a Newton step to f_next (in ws.next) that lowered f by more than
+// kExtendDecrease of |f|, one trial of twice the step, kept when it lowers f further; returns the
+// f of the step kept (in ws.next, ws.next_HY). On the flat, indefinite stretch after a staircase
+// escape the damped step is short and the longer one gains (tight_noisy N = 5: 28 → 19 steps,
+// BENCHMARKS.md, session 13); near the optimum the decrease is below kExtendDecrease and nothing
+// is tried. At rank 1 Newton runs from the spectral start, where the trial only costs (+5 % on
+// tight_noisy N = 8 and 16).
+constexpr double kExtendDecrease = 1e-3;
+double extend_step(const MatrixXcd& H, const MatrixXcd& Y, int t, double f, double f_next, ComplexWorkspace& ws) {
+  if (Y.cols() == 1 || !(f - f_next > kExtendDecrease * std::abs(f))) return f_next;
+  ws.kept.swap(ws.next);
+  ws.kept_HY.swap(ws.next_HY);
+  ws.eta *= 2.0;
+  const double f_longer = trial_step(H, Y, t, ws);
+  if (f_longer < f_next) return f_longer;
+  ws.next.swap(ws.kept);
+  ws.next_HY.swap(ws.kept_HY);
+  return f_next;
+}
+
 }  // namespace
 
 std::string complex_embedding_mismatch(const Eigen::MatrixXd& C) {
@@ -160,9 +181,10 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
     const double f_next = damped_newton_step(ws.Hm, ws.llt, ws.g, ws.eta, damping, f, noise,
                                              [&](const VectorXd&) { return trial_step(H, Y, t, ws); });
     if (std::isnan(f_next)) break;
+    const double f_kept = extend_step(H, Y, t, f, f_next, ws);
     Y.swap(ws.next);
     ws.HY.swap(ws.next_HY);
-    f = f_next;
+    f = f_kept;
   }
   return it;
 }
