@@ -456,6 +456,53 @@ TEST(SdpStatus, TooFewRoundsIsCertifiedNotUnique) {
   expect_certificate(C, 2, r);
 }
 
+// The plain relaxation of noise-free rounds (N + 1 of them): the optimum is 0, attained on C's
+// null space of dimension N − 1. The interior point used to stall above the gap tolerance there
+// (relative gap 1.3e-7 at N = 8, seed 1) and these solves ended not_certified (10 of 40 seeds
+// at N = 8); with the primal direction formed through Z's factor near the optimum they certify.
+// A result certified unique has rank 2 (Newton at rank d from the interior point's X).
+TEST(SdpStatus, PlainFormNoiseFreeRoundsAreCertified) {
+  for (const auto& [drones, seed] : {std::pair{8, 1}, {8, 7}, {8, 9}, {8, 11}, {12, 2}, {12, 5}, {4, 1}, {4, 35}, {5, 8}}) {
+    SCOPED_TRACE("N = " + std::to_string(drones) + ", seed " + std::to_string(seed));
+    const Eigen::MatrixXd C = fact::paper_cost(noise_free(drones, drones + 1, seed).sums);
+    const Result r = fact::sdp::solve(C, 2);
+    expect_certificate(C, 2, r);
+    EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+    if (r.status == Status::certified_unique) {
+      EXPECT_EQ(r.rank, 2) << r.reason;
+    }
+  }
+}
+
+// The interior point alone (no Newton polish) reaches the gap on the paper's noisy plain cost;
+// before, it stalled at a relative gap of 3e-9 (N = 5) and 1.4e-8 (N = 8).
+TEST(SdpStatus, InteriorPointAloneCertifiesTheNoisyPlainForm) {
+  for (int drones : {5, 8}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    fact::SyntheticOptions o;
+    o.drones = drones;
+    o.rounds = drones + 1;
+    o.noise = 0.05;
+    o.seed = 2000 + drones;  // fact-bench-sdp's plain_noisy instance
+    const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+    Options options;
+    options.method = Method::interior_point;
+    const Result r = fact::sdp::solve(C, 2, options);
+    EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+    expect_certificate(C, 2, r);
+  }
+}
+
+// Rank-2 Newton that stops with S ⪰ 0 but a bound just short of the gap (plain form, noise-free,
+// N = 4, seed 9: λ_min(S) ≈ −1e-13) takes one more step and certifies, instead of handing the
+// problem to the interior point.
+TEST(SdpStatus, NewtonShortOfTheGapTakesOneMoreStep) {
+  const Eigen::MatrixXd C = fact::paper_cost(noise_free(4, 5, 9).sums);
+  const Result r = fact::sdp::solve(C, 2);
+  EXPECT_EQ(r.method_used, Method::low_rank) << r.reason;
+  expect_certificate(C, 2, r);
+}
+
 TEST(SdpStatus, UncoupledD1BlocksAreCertifiedNotUnique) {
   Eigen::MatrixXd C(2, 2);
   C << 1.5, 0.0, 0.0, 2.5;  // ⟨C, X⟩ = 4 for every feasible X

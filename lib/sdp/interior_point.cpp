@@ -20,6 +20,10 @@
 namespace fact::sdp::detail {
 namespace {
 
+// Below this relative gap the primal direction is formed through Z's factor (primal_direction):
+// one more n × n product per direction, paid only in the last 3–5 iterations.
+constexpr double kAccurateDirectionGap = 1e-6;
+
 struct Entry {
   int u, v;  // the (row, column) of X this constraint fixes, u ≤ v
 };
@@ -80,7 +84,7 @@ void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, cons
 struct Workspace {
   Workspace(int n, int m, int d)
       : chol_x(n), chol_z(n), Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
-        dx(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
+        dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
   Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n), large n
   Eigen::MatrixXd Lx, Lz;                      // the same factors for small n (cholesky_lower, n × n)
   Eigen::LLT<Eigen::MatrixXd> chol_m;          // the Schur complement's factorisation (m × m)
@@ -89,6 +93,7 @@ struct Workspace {
   Eigen::MatrixXd M;                           // Schur complement (m × m)
   Eigen::MatrixXd P;                           // scratch n × n product, multiplied by W
   Eigen::MatrixXd dx_aff, dx;                  // predictor / corrector primal directions (n × n)
+  Eigen::MatrixXd PLt;                         // P Lz⁻ᵀ for the accurate primal direction (n × n)
   Eigen::MatrixXd dz_aff, dz;                  // dual directions ΔZ = −Aᵀ(Δy), diagonal blocks stacked (n × d)
   Eigen::VectorXd rhs, dy_aff, dy;             // Schur right-hand side and dual directions (m)
   StepLength steps;                            // step-length work matrices
@@ -102,9 +107,18 @@ bool factorize(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Z, bool small, W
   return ws.chol_z.info() == Eigen::Success && ws.chol_x.info() == Eigen::Success;
 }
 
-// The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n).
-void primal_direction(const Eigen::MatrixXd& X, double sigma_mu, Workspace& ws, Eigen::MatrixXd& dx) {
-  dx.noalias() = -ws.P * ws.W;
+// The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n). With
+// `accurate`, P W is formed as (P Lz⁻ᵀ) Lz⁻¹ (one more n × n product): near the optimum W's
+// entries grow as 1/μ and P W cancels to O(1), and the product with W loses the digits the last
+// iterations need (the gap stalled at 1e-7 on the noise-free plain form, N = 8, whose optimum
+// is 0, and at 1e-8 on plain_noisy N = 5 and 8); through the factor the intermediate grows only as 1/√μ.
+void primal_direction(const Eigen::MatrixXd& X, double sigma_mu, bool accurate, Workspace& ws, Eigen::MatrixXd& dx) {
+  if (accurate) {
+    ws.PLt.noalias() = ws.P * ws.Lz_inv.transpose();  // P Lz⁻ᵀ
+    dx.noalias() = -ws.PLt * ws.Lz_inv;
+  } else {
+    dx.noalias() = -ws.P * ws.W;
+  }
   dx -= X;
   if (sigma_mu != 0) dx += sigma_mu * ws.W;
   symmetrize(dx);
@@ -164,6 +178,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     }
     if (rule.stops(verdict, "interior point", it + 1, out)) break;
     const double mu = gap / n;
+    const bool accurate = rel_gap < kAccurateDirectionGap;
     if (!factorize(X, Z, exact_steps, ws)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
@@ -184,7 +199,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     lambda_from_y(ws.dy_aff, entries, d, ws.dz_aff);
     ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
     times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
-    primal_direction(X, 0.0, ws, ws.dx_aff);
+    primal_direction(X, 0.0, accurate, ws, ws.dx_aff);
     const double ap_aff = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx_aff, 1.0);
     const double ad_aff = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
@@ -204,7 +219,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     // ΔX = σμW − X − (ΔX_a ΔZ_a + X ΔZ) W: one n × n product with W.
     times_block_diagonal(X, ws.dz, d, ws.dx);  // X ΔZ, through dx as scratch
     ws.P += ws.dx;
-    primal_direction(X, sigma * mu, ws, ws.dx);
+    primal_direction(X, sigma * mu, accurate, ws, ws.dx);
     const double ap = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx, tau);
     const double ad = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz, d, tau);
     if (ap == 0.0 && ad == 0.0) {

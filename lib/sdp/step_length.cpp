@@ -104,6 +104,20 @@ double gershgorin_radius(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return radius;
 }
 
+// The smallest eigenvalue of L⁻¹ Δ L⁻ᵀ estimated by Lanczos (full reorthogonalisation): 8 steps
+// for the predictor (τ = 1), 24 for the corrector. apply_delta(u, w) writes w = Δ u. Ritz values
+// lie inside the spectrum, so the corrector's step is confirmed by a Cholesky test.
+template <class ApplyDelta>
+double lanczos_min_eig(const Eigen::MatrixXd& L, double tau, ApplyDelta apply_delta) {
+  const auto lower = L.triangularView<Eigen::Lower>();
+  Eigen::VectorXd u(L.rows());
+  return lanczos_lowest<Eigen::VectorXd>(L.rows(), tau >= 1.0 ? 8 : 24, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+    u = lower.transpose().solve(v);  // L⁻ᵀ v
+    apply_delta(u, w);
+    lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v
+  });
+}
+
 // out = P · blkdiag(D) for P n × n and D the d × d diagonal blocks stacked (n × d): O(n² d).
 template <int Dim>
 void times_block_diagonal_fixed(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, Eigen::MatrixXd& out) {
@@ -166,12 +180,12 @@ StepLength::StepLength(int n)
 double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                         const Eigen::MatrixXd& delta, double tau) {
   double alpha;
-  if (P.rows() <= kExactStepMaxSize) {
+  if (!estimated(P.rows(), tau)) {
     G_.noalias() = inverse * delta;                // L⁻¹ Δ
     B_.noalias() = G_ * inverse.transpose();       // L⁻¹ Δ L⁻ᵀ
     alpha = from_min_eigenvalue_of_B(tau);
   } else {
-    const double lmin = lanczos_min_eig(L, delta);
+    const double lmin = lanczos_min_eig(L, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
     alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   }
   if (tau >= 1.0) return alpha;
@@ -181,14 +195,18 @@ double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, cons
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                                   const Eigen::MatrixXd& D, int d, double tau) {
   const Eigen::Index n = P.rows();
-  if (n > kExactStepMaxSize) {
-    Eigen::MatrixXd delta = Eigen::MatrixXd::Zero(n, n);  // Δ in full for the Lanczos estimate
-    for (Eigen::Index i = 0; i < n; i += d) delta.block(i, i, d, d) = D.middleRows(i, d).leftCols(d);
-    return full(P, L, inverse, delta, tau);
+  double alpha;
+  if (!estimated(n, tau)) {
+    times_block_diagonal(inverse, D, d, G_);  // L⁻¹ Δ, Δ = blkdiag(D)
+    B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
+    alpha = from_min_eigenvalue_of_B(tau);
+  } else {
+    const double lmin = lanczos_min_eig(L, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
+      w.resize(n);  // Δ u block by block
+      for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
+    });
+    alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   }
-  times_block_diagonal(inverse, D, d, G_);  // L⁻¹ Δ, Δ = blkdiag(D)
-  B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
-  const double alpha = from_min_eigenvalue_of_B(tau);
   if (tau >= 1.0) return alpha;
   return shrink_until_positive(alpha, [&](double a) {  // trial_ = P + a Δ, Δ added blockwise
     trial_ = P;
@@ -210,17 +228,6 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
     (eigenvalues_below(diagonal_, subdiagonal_, mid) > 0 ? hi : lo) = mid;
   }
   return tau / -lo;
-}
-
-// Smallest eigenvalue estimate of L⁻¹ Δ L⁻ᵀ by Lanczos (24 steps, full reorthogonalisation).
-// Ritz values lie inside the spectrum, so the caller verifies the step with a Cholesky test.
-double StepLength::lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& delta) {
-  const auto lower = L.triangularView<Eigen::Lower>();
-  return lanczos_lowest<Eigen::VectorXd>(delta.rows(), 24, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
-    w = lower.transpose().solve(v);  // L⁻ᵀ v
-    w = delta * w;
-    lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v
-  });
 }
 
 bool StepLength::positive_definite() {
