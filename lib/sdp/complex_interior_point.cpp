@@ -23,13 +23,28 @@ using Eigen::MatrixXcd;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+// A = L Lᴴ for a Hermitian A (N × N), factored in place by Eigen's blocked kernel into the lower
+// triangle of L. Eigen::LLT::compute also sums |a_ij| over the matrix for a condition estimate
+// that nothing here reads; for complex entries that is a hypot per entry, 8 % of the interior
+// point's time at N = 100 (BENCHMARKS.md, session 13).
+struct ComplexCholesky {
+  explicit ComplexCholesky(Eigen::Index N) : L(N, N) {}
+  // False when A is not positive definite.
+  bool compute(const MatrixXcd& A) {
+    L = A;
+    return Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(L) == -1;
+  }
+  Eigen::TriangularView<const MatrixXcd, Eigen::Lower> lower() const { return L.triangularView<Eigen::Lower>(); }
+  MatrixXcd L;  // N × N: the factor in the lower triangle, the upper triangle unused
+};
+
 // Every matrix of one iteration, allocated once (N × N complex unless noted).
 struct Workspace {
   explicit Workspace(Eigen::Index N)
       : chol_x(N), chol_z(N), test(N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
-        trial(N, N), u(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
-  Eigen::LLT<MatrixXcd> chol_x, chol_z;  // X = Lx Lxᴴ, Z = Lz Lzᴴ
-  Eigen::LLT<MatrixXcd> test;            // Cholesky test of a trial step
+        trial(N, N), PZ(N, N), u(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
+  ComplexCholesky chol_x, chol_z;        // X = Lx Lxᴴ, Z = Lz Lzᴴ
+  ComplexCholesky test;                  // Cholesky test of a trial step
   MatrixXcd Lz_inv;                      // Lz⁻¹ (lower triangular)
   MatrixXcd W;                           // Z⁻¹
   MatrixXd M;                            // Schur complement, N × N real
@@ -37,6 +52,7 @@ struct Workspace {
   MatrixXcd P;                           // scratch product, multiplied by Z⁻¹ (primal_direction)
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
+  MatrixXcd PZ;                          // Z⁻¹ Pᴴ, by triangular solves (primal_direction)
   Eigen::VectorXcd u;                    // Lanczos scratch vector, N
   VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
 };
@@ -64,9 +80,9 @@ constexpr int kLanczosSteps = 8;
 // Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
 // Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it passes.
 template <class ApplyDelta, class FormTrial>
-double step_length(const Eigen::LLT<MatrixXcd>& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
+double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
                    FormTrial form_trial) {
-  const auto L = chol.matrixL();
+  const auto L = chol.lower();
   const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
                                                          [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
                                                            ws.u = L.adjoint().solve(v);  // L⁻ᴴ v
@@ -77,8 +93,7 @@ double step_length(const Eigen::LLT<MatrixXcd>& chol, double tau, Workspace& ws,
   if (tau >= 1.0) return alpha;  // the predictor's step only sets σ
   for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
     form_trial(alpha);
-    ws.test.compute(ws.trial);
-    if (ws.test.info() == Eigen::Success) return alpha;
+    if (ws.test.compute(ws.trial)) return alpha;
   }
   return 0.0;
 }
@@ -104,7 +119,10 @@ double dual_step(const MatrixXcd& Z, const VectorXd& dy, Workspace& ws, double t
 // factor, not a product with W: near the optimum W's entries grow as 1/μ and the product loses
 // the digits the last iterations need (with it the gap stalls at 1e-7 … 1e-8 on tight_noisy).
 void primal_direction(const MatrixXcd& X, double sigma_mu, Workspace& ws, MatrixXcd& dx) {
-  dx = -ws.chol_z.solve(ws.P.adjoint()).adjoint();  // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
+  ws.PZ = ws.P.adjoint();
+  ws.chol_z.lower().solveInPlace(ws.PZ);
+  ws.chol_z.lower().adjoint().solveInPlace(ws.PZ);  // Z⁻¹ Pᴴ
+  dx = -ws.PZ.adjoint();                            // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
   dx -= X;
   if (sigma_mu != 0) dx += sigma_mu * ws.W;
   hermitian_part(dx);
@@ -146,14 +164,12 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     if (rule.stops(verdict, "complex interior point", it + 1, out)) break;
     const double mu = gap / static_cast<double>(N);
-    ws.chol_z.compute(Z);
-    ws.chol_x.compute(X);
-    if (ws.chol_z.info() != Eigen::Success || ws.chol_x.info() != Eigen::Success) {
+    if (!ws.chol_z.compute(Z) || !ws.chol_x.compute(X)) {
       out.reason = "complex interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
-    ws.Lz_inv = ws.chol_z.matrixL().solve(MatrixXcd::Identity(N, N));
-    ws.W.noalias() = ws.Lz_inv.adjoint() * ws.Lz_inv;  // Z⁻¹
+    ws.Lz_inv = ws.chol_z.lower().solve(MatrixXcd::Identity(N, N));  // lower triangular, zeros above
+    ws.W.noalias() = ws.Lz_inv.adjoint().triangularView<Eigen::Upper>() * ws.Lz_inv;  // Z⁻¹, half a full product
     ws.M = (X.array() * ws.W.array().conjugate()).real();
     ws.chol_m.compute(ws.M);
     if (ws.chol_m.info() != Eigen::Success) {
