@@ -251,7 +251,10 @@ int nullity(const Certificate& cert, const Options& o) {
 // the same Λ (Λ from the new factor would be ≈ 0 there, and S ≈ C would lose the uniqueness proof).
 Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d || numerical_rank(c.Y) <= d) return c;
-  Eigen::MatrixXd Y = detail::factor_psd(c.Y * c.Y.transpose(), 0.0).leftCols(d);  // n × d
+  // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the r × r
+  // Gram matrix Yᵀ Y (no n × n eigensolve): n × d.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(c.Y.transpose() * c.Y);
+  Eigen::MatrixXd Y = c.Y * gram.eigenvectors().rightCols(d);
   if (!detail::project_blocks(Y, d)) return c;
   Candidate polished = c;
   polished.iterations += detail::newton_refine(C, d, Y, 20, 1e-12);

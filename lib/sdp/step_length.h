@@ -16,8 +16,8 @@ namespace fact::sdp::detail {
 // it a 24-step Lanczos estimate is verified by Cholesky tests.
 constexpr int kExactStepMaxSize = 48;
 // From this n on, the predictor's step (τ = 1, it only sets the centring σ) is an 8-step Lanczos
-// estimate, O(n²) a step, at any n: the same iterations on the benchmark's plain and random
-// instances, and 3 / 10 / 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128
+// estimate, O(n²) a step, at any n: the same iterations (or one fewer) on the benchmark's plain
+// and random instances, and 3 / 10 / 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128
 // (plain_noisy; below n = 24 the exact path's plain loops cost less than Eigen's triangular solves).
 constexpr int kPredictorLanczosMinSize = 24;
 
