@@ -98,7 +98,9 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   c.primal = primal_objective(C, c.Y, c.cert, d);
   if (!misses_only_the_gap(c, o)) return c;
   Candidate next = c;  // one more Newton step (grad_tol 0: always taken, unless no damping is accepted)
-  next.iterations += detail::newton_refine(C, d, next.Y, 1, 0.0);
+  const int steps = detail::newton_refine(C, d, next.Y, 1, 0.0);
+  if (steps == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
+  next.iterations += steps;
   next.cert = detail::certify(C, detail::lambda_from_factor(C, next.Y, d), d, false);
   next.primal = primal_objective(C, next.Y, next.cert, d);
   return is_certified(next, o) ? next : c;
@@ -123,6 +125,7 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   Candidate c = candidate_of(C, out, Method::complex_low_rank);
   if (!misses_only_the_gap(c, o)) return c;
   const int steps = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as in from_low_rank
+  if (steps == 0) return c;
   Candidate next = candidate_of(C, detail::complex_outcome(H, std::move(out.Y), out.iterations + steps, false),
                                 Method::complex_low_rank);
   return is_certified(next, o) ? next : c;
@@ -249,10 +252,11 @@ int nullity(const Certificate& cert, const Options& o) {
 // bound (noise-free plain form, N = 4, seed 35: rank 3, λ_3(S) = 3.2e-9). Newton at rank d from
 // X's top-d eigenvectors then gives the rank-d optimum, which is kept when it certifies against
 // the same Λ (Λ from the new factor would be ≈ 0 there, and S ≈ C would lose the uniqueness proof).
+// Automatic mode only: an explicit method returns its own factor.
 Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d || numerical_rank(c.Y) <= d) return c;
-  // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the r × r
-  // Gram matrix Yᵀ Y (no n × n eigensolve): n × d.
+  // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
+  // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor; this path is rare): n × d.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(c.Y.transpose() * c.Y);
   Eigen::MatrixXd Y = c.Y * gram.eigenvectors().rightCols(d);
   if (!detail::project_blocks(Y, d)) return c;
@@ -328,7 +332,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     }
     if (!try_low_rank || is_certified(ip, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
   }
-  best = at_unique_rank(Cs, d, std::move(best), options);
+  if (options.method == Method::automatic) best = at_unique_rank(Cs, d, std::move(best), options);
 
   const double primal = best.primal;
   r.method_used = best.method;

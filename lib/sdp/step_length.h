@@ -12,8 +12,8 @@
 
 namespace fact::sdp::detail {
 
-// Largest n for which the step length is computed exactly (tridiagonalisation, O(n³)); above
-// it a 24-step Lanczos estimate is verified by Cholesky tests.
+// Largest n for which the corrector's step length is computed exactly (tridiagonalisation,
+// O(n³)); above it a 24-step Lanczos estimate is verified by Cholesky tests.
 constexpr int kExactStepMaxSize = 48;
 // From this n on, the predictor's step (τ = 1, it only sets the centring σ) is an 8-step Lanczos
 // estimate, O(n²) a step, at any n: the same iterations (or one fewer) on the benchmark's plain
