@@ -252,9 +252,9 @@ int nullity(const Certificate& cert, const Options& o) {
 // bound (noise-free plain form, N = 4, seed 35: rank 3, λ_3(S) = 3.2e-9). Newton at rank d from
 // X's top-d eigenvectors then gives the rank-d optimum, which is kept when it certifies against
 // the same Λ (Λ from the new factor would be ≈ 0 there, and S ≈ C would lose the uniqueness proof).
-// Automatic mode only: an explicit method returns its own factor.
+// Automatic mode only (an explicit method returns its own factor), for a factor of numerical rank > d.
 Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
-  if (!is_certified(c, o) || nullity(c.cert, o) != d || numerical_rank(c.Y) <= d) return c;
+  if (!is_certified(c, o) || nullity(c.cert, o) != d) return c;
   // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
   // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor; this path is rare): n × d.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(c.Y.transpose() * c.Y);
@@ -332,7 +332,11 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     }
     if (!try_low_rank || is_certified(ip, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
   }
-  if (options.method == Method::automatic) best = at_unique_rank(Cs, d, std::move(best), options);
+  int rank = numerical_rank(best.Y);
+  if (options.method == Method::automatic && rank > d) {
+    best = at_unique_rank(Cs, d, std::move(best), options);
+    rank = numerical_rank(best.Y);
+  }
 
   const double primal = best.primal;
   r.method_used = best.method;
@@ -342,7 +346,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.dual_bound = best.cert.dual_bound * r.scale;
   r.rel_gap = relative_gap(primal, best.cert.dual_bound);
   r.min_eig_S = best.cert.min_eig;
-  r.rank = numerical_rank(best.Y);
+  r.rank = rank;
   r.iterations = best.iterations;
   classify(r, best, options);
   r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
