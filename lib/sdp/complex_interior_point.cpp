@@ -41,10 +41,11 @@ struct ComplexCholesky {
 // Every matrix of one iteration, allocated once (N × N complex unless noted).
 struct Workspace {
   explicit Workspace(Eigen::Index N)
-      : chol_x(N), chol_z(N), test(N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
-        trial(N, N), PZ(N, N), u(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
+      : chol_x(N), chol_z(N), next_x(N), next_z(N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
+        trial(N, N), PZ(N, N), u(N), u_y(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
   ComplexCholesky chol_x, chol_z;        // X = Lx Lxᴴ, Z = Lz Lzᴴ
-  ComplexCholesky test;                  // Cholesky test of a trial step
+  ComplexCholesky next_x, next_z;        // Cholesky tests of the corrector's X + αΔX, Z + αΔZ: the
+                                         // next iteration's chol_x, chol_z once the step is taken
   MatrixXcd Lz_inv;                      // Lz⁻¹ (lower triangular)
   MatrixXcd W;                           // Z⁻¹
   MatrixXd M;                            // Schur complement, N × N real
@@ -52,8 +53,9 @@ struct Workspace {
   MatrixXcd P;                           // scratch product, multiplied by Z⁻¹ (primal_direction)
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
-  MatrixXcd PZ;                          // Z⁻¹ Pᴴ, by triangular solves (primal_direction)
+  MatrixXcd PZ;                          // Z⁻¹ Pᴴ, by triangular solves (accurate primal_direction)
   Eigen::VectorXcd u;                    // Lanczos scratch vector, N
+  VectorXd u_y;                          // y + αΔy of a dual trial, N
   VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
 };
 
@@ -76,11 +78,15 @@ void hermitian_part(MatrixXcd& A) {
 // (BENCHMARKS.md, sessions 12 and 13).
 constexpr int kLanczosSteps = 8;
 
+// Below this relative gap the primal direction is formed through Z's factor (primal_direction).
+constexpr double kAccurateDirectionGap = 1e-6;
+
 // min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
 // Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
-// Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it passes.
+// Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it
+// passes; `next` then holds the factor of P + αΔ.
 template <class ApplyDelta, class FormTrial>
-double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, ApplyDelta apply_delta,
+double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, ComplexCholesky& next, ApplyDelta apply_delta,
                    FormTrial form_trial) {
   const auto L = chol.lower();
   const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
@@ -93,7 +99,7 @@ double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, Apply
   if (tau >= 1.0) return alpha;  // the predictor's step only sets σ
   for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
     form_trial(alpha);
-    if (ws.test.compute(ws.trial)) return alpha;
+    if (next.compute(ws.trial)) return alpha;
   }
   return 0.0;
 }
@@ -101,28 +107,36 @@ double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, Apply
 // The step for X + α ΔX.
 double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, double tau) {
   return step_length(
-      ws.chol_x, tau, ws, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w.noalias() = dx * u; },
+      ws.chol_x, tau, ws, ws.next_x, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w.noalias() = dx * u; },
       [&](double a) { ws.trial = X + a * dx; });
 }
 
-// The step for Z + α ΔZ with ΔZ = −diag(Δy).
-double dual_step(const MatrixXcd& Z, const VectorXd& dy, Workspace& ws, double tau) {
+// The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y). The trial is formed as
+// H − diag(y + α Δy), the expressions the update uses, so that a step taken has its factor.
+double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, const VectorXd& dy, Workspace& ws, double tau) {
   return step_length(
-      ws.chol_z, tau, ws, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w = -(dy.array() * u.array()).matrix(); },
+      ws.chol_z, tau, ws, ws.next_z, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w = -(dy.array() * u.array()).matrix(); },
       [&](double a) {
         ws.trial = Z;
-        ws.trial.diagonal() -= (a * dy).cast<std::complex<double>>();
+        ws.u_y = y + a * dy;
+        ws.trial.diagonal() = H.diagonal() - ws.u_y.cast<std::complex<double>>();
       });
 }
 
-// ΔX = herm(σμW − X − P Z⁻¹) for the P already in ws.P; P Z⁻¹ by two triangular solves with Z's
-// factor, not a product with W: near the optimum W's entries grow as 1/μ and the product loses
-// the digits the last iterations need (with it the gap stalls at 1e-7 … 1e-8 on tight_noisy).
-void primal_direction(const MatrixXcd& X, double sigma_mu, Workspace& ws, MatrixXcd& dx) {
-  ws.PZ = ws.P.adjoint();
-  ws.chol_z.lower().solveInPlace(ws.PZ);
-  ws.chol_z.lower().adjoint().solveInPlace(ws.PZ);  // Z⁻¹ Pᴴ
-  dx = -ws.PZ.adjoint();                            // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
+// ΔX = herm(σμW − X − P Z⁻¹) for the P already in ws.P. With `accurate`, P Z⁻¹ is formed by two
+// triangular solves with Z's factor instead of the product P W: near the optimum W's entries
+// grow as 1/μ and the product loses the digits the last iterations need (with it alone the gap
+// stalls at 1e-7 … 1e-8 on tight_noisy); the product is cheaper before that (as in the real
+// interior point, interior_point.cpp).
+void primal_direction(const MatrixXcd& X, double sigma_mu, bool accurate, Workspace& ws, MatrixXcd& dx) {
+  if (accurate) {
+    ws.PZ = ws.P.adjoint();
+    ws.chol_z.lower().solveInPlace(ws.PZ);
+    ws.chol_z.lower().adjoint().solveInPlace(ws.PZ);  // Z⁻¹ Pᴴ
+    dx = -ws.PZ.adjoint();                            // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
+  } else {
+    dx.noalias() = -ws.P * ws.W;
+  }
   dx -= X;
   if (sigma_mu != 0) dx += sigma_mu * ws.W;
   hermitian_part(dx);
@@ -150,6 +164,10 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   GapRule rule(options.gap_tol, handoff_gap);  // the iterate with the smallest gap so far is kept
   MatrixXcd best_X = X;
   VectorXd best_y = y;
+  // X and Z are factored at the first iteration only: after it chol_x and chol_z are the factors
+  // the corrector's step-length tests computed for the step taken (or still those of X and Z
+  // when a step length is 0), two N × N factorisations fewer per iteration.
+  bool factored = false;
   for (int it = 0; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1;
     const double primal = (H.array() * X.array().conjugate()).real().sum(), dual = y.sum();
@@ -164,10 +182,12 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     if (rule.stops(verdict, "complex interior point", it + 1, out)) break;
     const double mu = gap / static_cast<double>(N);
-    if (!ws.chol_z.compute(Z) || !ws.chol_x.compute(X)) {
+    const bool accurate = rel_gap < kAccurateDirectionGap;
+    if (!factored && (!ws.chol_z.compute(Z) || !ws.chol_x.compute(X))) {
       out.reason = "complex interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
+    factored = true;
     ws.Lz_inv = ws.chol_z.lower().solve(MatrixXcd::Identity(N, N));  // lower triangular, zeros above
     ws.W.noalias() = ws.Lz_inv.adjoint().triangularView<Eigen::Upper>() * ws.Lz_inv;  // Z⁻¹, half a full product
     ws.M = (X.array() * ws.W.array().conjugate()).real();
@@ -179,9 +199,9 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     // Predictor (σ = 0): M Δy = A(X) = 1; ΔX = −X − X ΔZ W with X ΔZ = −X diag(Δy).
     ws.dy_aff = ws.chol_m.solve(ws.ones);
     ws.P.noalias() = -X * ws.dy_aff.asDiagonal();
-    primal_direction(X, 0.0, ws, ws.dx_aff);
+    primal_direction(X, 0.0, accurate, ws, ws.dx_aff);
     const double ap_aff = primal_step(X, ws.dx_aff, ws, 1.0);
-    const double ad_aff = dual_step(Z, ws.dy_aff, ws, 1.0);
+    const double ad_aff = dual_step(Z, H, y, ws.dy_aff, ws, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dy_aff, ad_aff) / static_cast<double>(N);
     const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
@@ -192,17 +212,23 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     ws.dy = ws.chol_m.solve(ws.rhs);
     ws.P.noalias() -= X * ws.dy.asDiagonal();  // + X ΔZ
-    primal_direction(X, sigma * mu, ws, ws.dx);
+    primal_direction(X, sigma * mu, accurate, ws, ws.dx);
     const double ap = primal_step(X, ws.dx, ws, tau);
-    const double ad = dual_step(Z, ws.dy, ws, tau);
+    const double ad = dual_step(Z, H, y, ws.dy, ws, tau);
     if (ap == 0.0 && ad == 0.0) {
       out.reason = "complex interior point stalled at iteration " + std::to_string(it);
       break;
     }
-    X += ap * ws.dx;
-    y += ad * ws.dy;
-    Z = H;
-    Z.diagonal() -= y.cast<std::complex<double>>();
+    // Bit for bit the tests' trials X + αΔX and H − diag(y + αΔy), so the factors are exact.
+    if (ap > 0) {
+      X += ap * ws.dx;
+      std::swap(ws.chol_x, ws.next_x);
+    }
+    if (ad > 0) {
+      y += ad * ws.dy;
+      Z.diagonal() = H.diagonal() - y.cast<std::complex<double>>();
+      std::swap(ws.chol_z, ws.next_z);
+    }
   }
   X = best_X;
   // Undo rounding drift: X ← D^{-1/2} X D^{-1/2}, D = diag(X), so the diagonal is 1 again.
