@@ -493,14 +493,30 @@ TEST(SdpStatus, InteriorPointAloneCertifiesTheNoisyPlainForm) {
   }
 }
 
-// Rank-2 Newton that stops with S ⪰ 0 but a bound just short of the gap (plain form, noise-free,
-// N = 4, seed 9: λ_min(S) ≈ −1e-13) takes one more step and certifies, instead of handing the
-// problem to the interior point.
+// Rank-2 Newton that stops with S ⪰ 0 but a bound just short of the gap (noise-free plain form,
+// N = 4: λ_min(S) ≈ −1e-13, a relative gap of a few 1e-9 on a zero optimum) takes one more step
+// and certifies, instead of handing the problem to the interior point. Which seeds end in that
+// state depends on the last bits of the arithmetic (on arm64, where the compiler fuses
+// multiply-adds, seed 9's Newton converges to another critical point), so the test runs 40 seeds:
+// every rank-2 Newton run that reaches S ⪰ 0 (low_rank capped at rank 2 and 25 steps, the
+// automatic mode's first try) must certify, and the automatic solve must then keep it.
 TEST(SdpStatus, NewtonShortOfTheGapTakesOneMoreStep) {
-  const Eigen::MatrixXd C = fact::paper_cost(noise_free(4, 5, 9).sums);
-  const Result r = fact::sdp::solve(C, 2);
-  EXPECT_EQ(r.method_used, Method::low_rank) << r.reason;
-  expect_certificate(C, 2, r);
+  int reached = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    const Eigen::MatrixXd C = fact::paper_cost(noise_free(4, 5, seed).sums);
+    fact::sdp::Options rank_d;
+    rank_d.method = Method::low_rank;
+    rank_d.max_rank = 2;
+    rank_d.max_newton_iterations = 25;
+    const Result newton = fact::sdp::solve(C, 2, rank_d);
+    if (newton.min_eig_S < -rank_d.psd_tol) continue;  // another critical point: the interior point's case
+    ++reached;
+    EXPECT_TRUE(newton.certified()) << "seed " << seed << ": " << newton.reason;
+    const Result r = fact::sdp::solve(C, 2);
+    EXPECT_EQ(r.method_used, Method::low_rank) << "seed " << seed << ": " << r.reason;
+    expect_certificate(C, 2, r);
+  }
+  EXPECT_GE(reached, 6);  // 12 of 40 seeds on x86-64, 20 with fused multiply-adds (-mfma -ffp-contract=fast)
 }
 
 TEST(SdpStatus, UncoupledD1BlocksAreCertifiedNotUnique) {
