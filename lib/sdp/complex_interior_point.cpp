@@ -78,9 +78,6 @@ void hermitian_part(MatrixXcd& A) {
 // (BENCHMARKS.md, sessions 12 and 13).
 constexpr int kLanczosSteps = 8;
 
-// Below this relative gap the primal direction is formed through Z's factor (primal_direction).
-constexpr double kAccurateDirectionGap = 1e-6;
-
 // min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
 // Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
 // Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it
@@ -111,15 +108,20 @@ double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, doubl
       [&](double a) { ws.trial = X + a * dx; });
 }
 
-// The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y). The trial is formed as
-// H − diag(y + α Δy), the expressions the update uses, so that a step taken has its factor.
+// Z's diagonal from y: Z_ii = H_ii − y_i (the rest of Z is H's). The start, the dual step's trials
+// and the update all go through it, so a step taken is bit for bit the trial that was factored.
+void set_slack_diagonal(const MatrixXcd& H, const VectorXd& y, MatrixXcd& Z) {
+  Z.diagonal() = H.diagonal() - y.cast<std::complex<double>>();
+}
+
+// The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y); the trial is H − diag(y + α Δy).
 double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, const VectorXd& dy, Workspace& ws, double tau) {
   return step_length(
       ws.chol_z, tau, ws, ws.next_z, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w = -(dy.array() * u.array()).matrix(); },
       [&](double a) {
         ws.trial = Z;
         ws.u_y = y + a * dy;
-        ws.trial.diagonal() = H.diagonal() - ws.u_y.cast<std::complex<double>>();
+        set_slack_diagonal(H, ws.u_y, ws.trial);
       });
 }
 
@@ -159,7 +161,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   MatrixXcd X = MatrixXcd::Identity(N, N);  // primal, N × N Hermitian
   VectorXd y = VectorXd::Constant(N, -2.0);  // dual, N
   MatrixXcd Z = H;                           // dual slack H − diag(y), N × N
-  Z.diagonal() -= y.cast<std::complex<double>>();
+  set_slack_diagonal(H, y, Z);
   const double tau = 0.95;
   GapRule rule(options.gap_tol, handoff_gap);  // the iterate with the smallest gap so far is kept
   MatrixXcd best_X = X;
@@ -226,7 +228,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     if (ad > 0) {
       y += ad * ws.dy;
-      Z.diagonal() = H.diagonal() - y.cast<std::complex<double>>();
+      set_slack_diagonal(H, y, Z);
       std::swap(ws.chol_z, ws.next_z);
     }
   }

@@ -20,10 +20,6 @@
 namespace fact::sdp::detail {
 namespace {
 
-// Below this relative gap the primal direction is formed through Z's factor (primal_direction):
-// one more n × n product per direction, paid only in the last 3–5 iterations.
-constexpr double kAccurateDirectionGap = 1e-6;
-
 struct Entry {
   int u, v;  // the (row, column) of X this constraint fixes, u ≤ v
 };

@@ -135,6 +135,12 @@ struct LowRankOutcome {
 // negative eigenvalue, add a column along its eigenvector and continue, up to max_rank.
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options);
 
+// Below this relative gap both interior points form the primal direction's P Z⁻¹ through Z's
+// Cholesky factor instead of the product P·W: near the optimum W's entries grow as 1/μ and the
+// product loses the digits the last iterations need; before that the product is cheaper
+// (primal_direction in interior_point.cpp and complex_interior_point.cpp).
+constexpr double kAccurateDirectionGap = 1e-6;
+
 // The stopping rules both interior points share. Each iteration's gap goes through next(); the
 // iterate with the smallest gap so far is the one to keep (once rounding limits the last digits
 // the gap can grow again). The interior point has converged below 0.1·gap_tol, hands off below
