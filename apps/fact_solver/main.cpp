@@ -20,6 +20,7 @@
 #include "common/estimator_flags.h"
 #include "common/flags.h"
 #include "fact/estimator.h"
+#include "fact/memory.h"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 
@@ -227,6 +228,7 @@ int main(int argc, char** argv) {
   if (const int code = fact::app::parse_flags(app, argc, argv, kApp, [&] { estimate_options = check(options); }); code >= 0) return code;
 
   const fact::app::Log log(kApp, options.common.drone_id);
+  fact::keep_freed_memory();  // each round's solve reuses the last one's memory (fact/memory.h)
   lcm::LCM lcm(options.common.lcm_url);
   if (!fact::app::lcm_opened(lcm, options.common.lcm_url, log)) return 1;
   fact::app::install_stop_handler();
