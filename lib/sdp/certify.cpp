@@ -57,7 +57,7 @@ GapRule::Verdict GapRule::next(double gap, double rel_gap, bool& improved) {
     best_gap_ = gap;
     best_rel_gap_ = rel_gap;
   }
-  if (rel_gap < 0.1 * gap_tol_) return last_ = Verdict::converged;
+  if (rel_gap < stop_gap_) return last_ = Verdict::converged;
   if (rel_gap < handoff_gap_ && improved) return last_ = Verdict::handed_off;
   if (gap < 0.5 * halved_gap_) {
     halved_gap_ = gap;

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "internal.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 namespace {
@@ -53,7 +54,7 @@ struct Workspace {
   MatrixXcd P;                           // scratch product, multiplied by Z⁻¹ (primal_direction)
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
-  MatrixXcd PZ;                          // Z⁻¹ Pᴴ, by triangular solves (accurate primal_direction)
+  MatrixXcd PZ;                          // P Lz⁻ᴴ (accurate primal_direction)
   Eigen::VectorXcd u;                    // Lanczos scratch vector, N
   VectorXd u_y;                          // y + αΔy of a dual trial, N
   VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
@@ -78,20 +79,12 @@ void hermitian_part(MatrixXcd& A) {
 // (BENCHMARKS.md, sessions 12 and 13).
 constexpr int kLanczosSteps = 8;
 
-// min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), λ_min estimated by
-// Lanczos, where apply_delta(u, w) writes w = Δ u. With τ < 1 the step is confirmed by a
-// Cholesky test of P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it
-// passes; `next` then holds the factor of P + αΔ.
-template <class ApplyDelta, class FormTrial>
-double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, ComplexCholesky& next, ApplyDelta apply_delta,
-                   FormTrial form_trial) {
-  const auto L = chol.lower();
-  const double lowest = lanczos_lowest<Eigen::VectorXcd>(ws.trial.rows(), kLanczosSteps,
-                                                         [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
-                                                           ws.u = L.adjoint().solve(v);  // L⁻ᴴ v
-                                                           apply_delta(ws.u, w);
-                                                           L.solveInPlace(w);  // L⁻¹ Δ L⁻ᴴ v
-                                                         });
+// min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), where `lowest` is
+// Lanczos's estimate of that λ_min. With τ < 1 the step is confirmed by a Cholesky test of
+// P + αΔ (form_trial(α) writes it into ws.trial), α shrunk by 0.7 until it passes; `next` then
+// holds the factor of P + αΔ.
+template <class FormTrial>
+double step_length(double lowest, double tau, Workspace& ws, ComplexCholesky& next, FormTrial form_trial) {
   double alpha = lowest >= 0 ? 1.0 : std::min(1.0, -tau / lowest);
   if (tau >= 1.0) return alpha;  // the predictor's step only sets σ
   for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
@@ -101,11 +94,16 @@ double step_length(const ComplexCholesky& chol, double tau, Workspace& ws, Compl
   return 0.0;
 }
 
-// The step for X + α ΔX.
+// The step for X + α ΔX; Lanczos on Lx⁻¹ ΔX Lx⁻ᴴ through triangular solves with X's factor (as
+// fast as products with an explicit Lx⁻¹ here, which would cost an inversion).
 double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, double tau) {
-  return step_length(
-      ws.chol_x, tau, ws, ws.next_x, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w.noalias() = dx * u; },
-      [&](double a) { ws.trial = X + a * dx; });
+  const auto L = ws.chol_x.lower();
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(X.rows(), kLanczosSteps, [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+    ws.u = L.adjoint().solve(v);  // Lx⁻ᴴ v
+    w.noalias() = dx * ws.u;
+    L.solveInPlace(w);  // Lx⁻¹ ΔX Lx⁻ᴴ v
+  });
+  return step_length(lowest, tau, ws, ws.next_x, [&](double a) { ws.trial = X + a * dx; });
 }
 
 // Z's diagonal from y: Z_ii = H_ii − y_i (the rest of Z is H's). The start, the dual step's trials
@@ -115,27 +113,29 @@ void set_slack_diagonal(const MatrixXcd& H, const VectorXd& y, MatrixXcd& Z) {
 }
 
 // The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y); the trial is H − diag(y + α Δy).
+// Lanczos on Lz⁻¹ ΔZ Lz⁻ᴴ through the explicit Lz⁻¹ (products, treated as dense).
 double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, const VectorXd& dy, Workspace& ws, double tau) {
-  return step_length(
-      ws.chol_z, tau, ws, ws.next_z, [&](const Eigen::VectorXcd& u, Eigen::VectorXcd& w) { w = -(dy.array() * u.array()).matrix(); },
-      [&](double a) {
-        ws.trial = Z;
-        ws.u_y = y + a * dy;
-        set_slack_diagonal(H, ws.u_y, ws.trial);
-      });
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(Z.rows(), kLanczosSteps, [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+    ws.u.noalias() = ws.Lz_inv.adjoint() * v;   // Lz⁻ᴴ v
+    ws.u.array() *= -dy.array();                // ΔZ Lz⁻ᴴ v
+    w.noalias() = ws.Lz_inv * ws.u;             // Lz⁻¹ ΔZ Lz⁻ᴴ v
+  });
+  return step_length(lowest, tau, ws, ws.next_z, [&](double a) {
+    ws.trial = Z;
+    ws.u_y = y + a * dy;
+    set_slack_diagonal(H, ws.u_y, ws.trial);
+  });
 }
 
-// ΔX = herm(σμW − X − P Z⁻¹) for the P already in ws.P. With `accurate`, P Z⁻¹ is formed by two
-// triangular solves with Z's factor instead of the product P W: near the optimum W's entries
-// grow as 1/μ and the product loses the digits the last iterations need (with it alone the gap
-// stalls at 1e-7 … 1e-8 on tight_noisy); the product is cheaper before that (as in the real
-// interior point, interior_point.cpp).
+// ΔX = herm(σμW − X − P Z⁻¹) for the P already in ws.P. With `accurate`, P Z⁻¹ is formed as
+// (P Lz⁻ᴴ) Lz⁻¹, one product more than P W: near the optimum W's entries grow as 1/μ and the
+// product with W loses the digits the last iterations need (with it alone the gap stalls at
+// 1e-7 … 1e-8 on tight_noisy); the product is cheaper before that (as in the real interior
+// point, interior_point.cpp).
 void primal_direction(const MatrixXcd& X, double sigma_mu, bool accurate, Workspace& ws, MatrixXcd& dx) {
   if (accurate) {
-    ws.PZ = ws.P.adjoint();
-    ws.chol_z.lower().solveInPlace(ws.PZ);
-    ws.chol_z.lower().adjoint().solveInPlace(ws.PZ);  // Z⁻¹ Pᴴ
-    dx = -ws.PZ.adjoint();                            // −(Z⁻¹ Pᴴ)ᴴ = −P Z⁻¹
+    ws.PZ.noalias() = ws.P * ws.Lz_inv.adjoint();  // P Lz⁻ᴴ
+    dx.noalias() = -ws.PZ * ws.Lz_inv;              // −P Z⁻¹
   } else {
     dx.noalias() = -ws.P * ws.W;
   }
@@ -163,7 +163,12 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   MatrixXcd Z = H;                           // dual slack H − diag(y), N × N
   set_slack_diagonal(H, y, Z);
   const double tau = 0.95;
-  GapRule rule(options.gap_tol, handoff_gap);  // the iterate with the smallest gap so far is kept
+  // Converged at ⟨X, Z⟩ below gap_tol (relative), not the real interior point's 0.1·gap_tol: the
+  // certificate comes from X's factor at its eigenvalues above 1e-10 of the largest (solve.cpp), which drops
+  // the part of X in S's range that makes up most of ⟨X, Z⟩. Stopped there, the certificates'
+  // gaps on tight_noisy N = 32 … 200 were 7e-12 … 1.9e-11; stopped at 10·gap_tol, up to 3.8e-10
+  // (BENCHMARKS.md, session 15). A certificate that misses the gap goes to the complex polish.
+  GapRule rule(options.gap_tol, handoff_gap, 1.0);  // the iterate with the smallest gap so far is kept
   MatrixXcd best_X = X;
   VectorXd best_y = y;
   // X and Z are factored at the first iteration only: after it chol_x and chol_z are the factors
@@ -190,8 +195,8 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
       break;
     }
     factored = true;
-    ws.Lz_inv = ws.chol_z.lower().solve(MatrixXcd::Identity(N, N));  // lower triangular, zeros above
-    ws.W.noalias() = ws.Lz_inv.adjoint().triangularView<Eigen::Upper>() * ws.Lz_inv;  // Z⁻¹, half a full product
+    invert_lower_factor(ws.chol_z.L, ws.Lz_inv);   // lower triangular, zeros above
+    ws.W.noalias() = ws.Lz_inv.adjoint() * ws.Lz_inv;  // Z⁻¹
     ws.M = (X.array() * ws.W.array().conjugate()).real();
     ws.chol_m.compute(ws.M);
     if (ws.chol_m.info() != Eigen::Success) {

@@ -143,13 +143,15 @@ constexpr double kAccurateDirectionGap = 1e-6;
 
 // The stopping rules both interior points share. Each iteration's gap goes through next(); the
 // iterate with the smallest gap so far is the one to keep (once rounding limits the last digits
-// the gap can grow again). The interior point has converged below 0.1·gap_tol, hands off below
-// handoff_gap (an improving iterate only), and has stalled when the gap grew after reaching 1e-6
-// or has not halved in 4 iterations; reason() then says why.
+// the gap can grow again). The interior point has converged below stop_fraction·gap_tol (0.1; the
+// complex one 1), hands off below handoff_gap (an improving iterate only), and has stalled when
+// the gap grew after reaching 1e-6 or has not halved in 4 iterations; reason() then says why.
 class GapRule {
  public:
   enum class Verdict { go_on, converged, handed_off, stalled };
-  GapRule(double gap_tol, double handoff_gap) : gap_tol_(gap_tol), handoff_gap_(handoff_gap) {}
+  // Converged below stop_fraction·gap_tol.
+  GapRule(double gap_tol, double handoff_gap, double stop_fraction = 0.1)
+      : gap_tol_(gap_tol), handoff_gap_(handoff_gap), stop_gap_(stop_fraction * gap_tol) {}
   // gap = ⟨X, Z⟩, rel_gap relative to the objective; `improved` is set when this iterate is the best.
   Verdict next(double gap, double rel_gap, bool& improved);
   std::string reason(const char* solver, int iterations) const;  // for handed_off and stalled
@@ -165,7 +167,7 @@ class GapRule {
   }
 
  private:
-  double gap_tol_, handoff_gap_;
+  double gap_tol_, handoff_gap_, stop_gap_;
   double best_gap_ = std::numeric_limits<double>::infinity(), best_rel_gap_ = best_gap_, halved_gap_ = best_gap_;
   int stalled_ = 0;  // iterations since the gap last halved
   Verdict last_ = Verdict::go_on;
@@ -234,7 +236,7 @@ struct ComplexInteriorPointOutcome {
   Eigen::MatrixXcd X;       // N × N Hermitian primal, unit diagonal
   Eigen::VectorXd y;        // N dual multipliers: S = H − diag(y)
   int iterations = 0;
-  bool converged = false;   // relative gap below 0.1·gap_tol
+  bool converged = false;   // relative gap below gap_tol
   bool handed_off = false;  // stopped at the handoff gap, before convergence
   std::string reason;       // why it stopped when not converged
 };

@@ -34,6 +34,11 @@ constexpr int kEarlyPolishMaxRows = 48;  // above it an interior-point iteration
 // 0.09 / 0.11 / 0.27 ms at N = 5 / 6 / 12 against the interior point's 0.13 / 0.18 / 0.79 ms,
 // and 17 ms at N = 32, p = 3, against 10–13 ms). Explicit complex_low_rank climbs to kMaxPolishSize.
 constexpr int kComplexMaxUnknowns = 80;
+// Newton steps for rank 1 when it is the staircase's only level. On paper-noise sweeps (N = 32 …
+// 100, noise 0.002 … 0.05, N + 1 rounds, 8–10 seeds each) every rank-1 solve that certified did
+// so within 12 steps; the others crawl (f falling by a few % a step, the gradient not converging)
+// until the interior point takes over, 25 steps in 3 ms at N = 100 (BENCHMARKS.md, session 15).
+constexpr int kOnlyLevelSteps = 15;
 // The complex form's handoff, at any n: Newton in complex arithmetic gets kComplexPolishSteps
 // steps when its system has at most kMaxComplexPolishSize unknowns. In the benchmark 3, 2, 2 and
 // 4 steps certify tight_noisy at N = 32, 64, 100 and 200; at N = 200, p = 7, the system has 2600
@@ -115,11 +120,13 @@ Candidate candidate_of(const Eigen::MatrixXd& C, const detail::ComplexOutcome& o
 
 // The complex staircase on H. In automatic mode each level gets at most 25 Newton steps, as
 // the real rank-d path: on the non-unique N = 200 instance rank 1 otherwise spends 60 steps
-// (54 ms) before the interior point takes over.
+// (54 ms) before the interior point takes over. When rank 1 is the only level (N > 26, where
+// rank 2's system would exceed kComplexMaxUnknowns) it gets kOnlyLevelSteps.
 Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   const bool automatic = o.method == Method::automatic;
   const int max_unknowns = automatic ? kComplexMaxUnknowns : kMaxPolishSize;
-  if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
+  const Eigen::Index N = C.rows() / 2;
+  if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, N * 3 > max_unknowns ? kOnlyLevelSteps : 25);
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns);
   Candidate c = candidate_of(C, out, Method::complex_low_rank);

@@ -159,19 +159,54 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
   return true;
 }
 
-void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
+namespace {
+
+// Below this size a diagonal block of L is inverted by forward substitution; above it the
+// recursion's matrix products, which Eigen vectorises far better than its triangular solves
+// (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
+constexpr Eigen::Index kInverseBlock = 24;
+
+// L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
+// zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products that
+// treat the triangular factors as dense (n³/3 multiply-adds in all against n³/6, at product speed).
+// The diagonal of L is real and positive (a Cholesky factor): divisions are by its real part.
+template <class Scalar>
+void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> L,
+                  Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> inverse) {
   const Eigen::Index n = L.rows();
-  inverse.setZero(n, n);
-  for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j
-    double* x = &inverse(0, j);
-    x[j] = 1.0;
-    for (Eigen::Index k = j; k < n; ++k) {
-      x[k] /= L(k, k);
-      const double xk = x[k];
-      const double* l = &L(0, k);
-      for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
+  if (n <= kInverseBlock) {
+    inverse.setZero();
+    for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j, by columns of L
+      Scalar* x = &inverse(0, j);
+      x[j] = 1.0;
+      for (Eigen::Index k = j; k < n; ++k) {
+        x[k] /= std::real(L(k, k));
+        const Scalar xk = x[k];
+        const Scalar* l = L.data() + k * L.outerStride();  // column k
+        for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
+      }
     }
+    return;
   }
+  const Eigen::Index k = n / 2, m = n - k;
+  invert_lower<Scalar>(L.topLeftCorner(k, k), inverse.topLeftCorner(k, k));
+  invert_lower<Scalar>(L.bottomRightCorner(m, m), inverse.bottomRightCorner(m, m));
+  inverse.topRightCorner(k, m).setZero();
+  const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> BA =
+      L.bottomLeftCorner(m, k) * inverse.topLeftCorner(k, k);  // B A⁻¹, m × k
+  inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
+}
+
+}  // namespace
+
+void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
+  inverse.resize(L.rows(), L.cols());
+  invert_lower<double>(L, inverse);
+}
+
+void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
+  inverse.resize(L.rows(), L.cols());
+  invert_lower<std::complex<double>>(L, inverse);
 }
 
 StepLength::StepLength(int n)

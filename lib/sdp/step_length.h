@@ -26,9 +26,11 @@ constexpr int kPredictorLanczosMinSize = 24;
 // the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead.
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
-// L⁻¹ for a lower-triangular L (n × n, upper triangle ignored), written into inverse (n × n,
-// lower triangular, upper part zero). Column-oriented forward substitution.
+// L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
+// triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
+// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks, forward substitution below.
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
+void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
 // A ← (A + Aᵀ)/2 in place (n × n).
 void symmetrize(Eigen::MatrixXd& A);
