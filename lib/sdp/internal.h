@@ -225,11 +225,14 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
                                bool want_vectors);
 
 // A complex factor (N × p, unit rows) of the Hermitian Z whose embedding is nearest to X
-// (2N × 2N, the K-average of X's blocks): Z's eigenvectors of eigenvalues above 1e-6 of the
-// largest, scaled by √eigenvalue, rows then normalised. The interior point's handoff to Newton.
+// (2N × 2N, the K-average of X's blocks), by complex_factor at a cutoff of 1e-6. The interior
+// point's handoff to Newton.
 Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X);
 
-// The same from a Hermitian Z (N × N) directly, keeping the eigenvalues above cutoff × the largest.
+// A factor Y (N × p, unit rows) of the Hermitian PSD Z (N × N) with Y Yᴴ ≈ Z: Cholesky with
+// diagonal pivoting, stopped when every remaining diagonal entry of Z − Y Yᴴ is at most cutoff ×
+// Z's largest diagonal entry (the part dropped then has trace ≤ N·cutoff·max Z_ii), rows then
+// normalised. N p² / 2 multiply-adds instead of an eigendecomposition (1 ms at N = 100).
 Eigen::MatrixXcd complex_factor(const Eigen::MatrixXcd& Z, double cutoff);
 
 struct ComplexInteriorPointOutcome {
