@@ -164,9 +164,9 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   set_slack_diagonal(H, y, Z);
   const double tau = 0.95;
   // Converged at ⟨X, Z⟩ below gap_tol (relative), not the real interior point's 0.1·gap_tol: the
-  // certificate comes from X's factor at its eigenvalues above 1e-10 of the largest (solve.cpp), which drops
-  // the part of X in S's range that makes up most of ⟨X, Z⟩. Stopped there, the certificates'
-  // gaps on tight_noisy N = 32 … 200 were 7e-12 … 1.9e-11; stopped at 10·gap_tol, up to 3.8e-10
+  // certificate comes from X's factor truncated at 1e-10 (solve.cpp), which drops X's small part,
+  // in S's range, that makes up most of ⟨X, Z⟩. Stopped there, the certificates' gaps on
+  // tight_noisy N = 32 … 200 were 7e-12 … 2.4e-11; stopped at 10·gap_tol, up to 3.8e-10
   // (BENCHMARKS.md, session 15). A certificate that misses the gap goes to the complex polish.
   GapRule rule(options.gap_tol, handoff_gap, 1.0);  // the iterate with the smallest gap so far is kept
   MatrixXcd best_X = X;

@@ -46,9 +46,9 @@ constexpr int kOnlyLevelSteps = 15;
 // alone leaves at a gap of 4e-7.
 constexpr int kComplexPolishSteps = 4;
 constexpr int kMaxComplexPolishSize = 3000;
-// The complex interior point's X is factored at the eigenvalues above this fraction of the
-// largest: at convergence the rest are rounding, and dropping them keeps the factor's rank that
-// of the optimum.
+// The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
+// remains of its diagonal is below this fraction of the largest entry: at convergence the rest
+// is rounding, and dropping it keeps the factor's rank that of the optimum.
 constexpr double kComplexFactorCutoff = 1e-10;
 
 struct Candidate {
@@ -149,8 +149,8 @@ std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixX
 }
 
 // The complex interior point on H (complex form, automatic mode), run to convergence. Its dual y
-// keeps S = H − diag(y) positive definite and its X (factored at the eigenvalues above
-// kComplexFactorCutoff of the largest, rows renormalised) is feasible, so the pair certifies
+// keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
+// rows renormalised) is feasible, so the pair certifies
 // without a polish; when the interior point stops short of the gap, complex Newton from its X
 // gets kComplexPolishSteps steps.
 Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o) {
