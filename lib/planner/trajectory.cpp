@@ -155,8 +155,8 @@ std::string min_jerk_within_limits(const TrajectoryStart& start, const Eigen::Ve
                        2.0 * start.velocity.norm() / limits.a_max, 0.05});
   // The rest-to-rest guess meets its binding limit exactly at the peak, so the sampled peak can
   // exceed it by rounding alone; kRounding (relative) keeps that from adding 2 % to the duration:
-  // with -march=native (fused multiply-adds) a move_max (1.5 m) move otherwise took 3.586 s, against the
-  // 3.516 s of move_slot, which is computed the same way.
+  // with -march=native (fused multiply-adds) a move_max (1.5 m) move otherwise took 3.586 s,
+  // against the 3.516 s of move_slot, which is computed the same way.
   constexpr double kRounding = 1e-12;
   for (int it = 0; it < 200; ++it) {
     const Trajectory tr = min_jerk(start, target, T);

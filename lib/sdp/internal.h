@@ -151,7 +151,7 @@ class GapRule {
   enum class Verdict { go_on, converged, handed_off, stalled };
   // Converged below stop_fraction·gap_tol.
   GapRule(double gap_tol, double handoff_gap, double stop_fraction = 0.1)
-      : gap_tol_(gap_tol), handoff_gap_(handoff_gap), stop_gap_(stop_fraction * gap_tol) {}
+      : handoff_gap_(handoff_gap), stop_gap_(stop_fraction * gap_tol) {}
   // gap = ⟨X, Z⟩, rel_gap relative to the objective; `improved` is set when this iterate is the best.
   Verdict next(double gap, double rel_gap, bool& improved);
   std::string reason(const char* solver, int iterations) const;  // for handed_off and stalled
@@ -167,7 +167,7 @@ class GapRule {
   }
 
  private:
-  double gap_tol_, handoff_gap_, stop_gap_;
+  double handoff_gap_, stop_gap_;
   double best_gap_ = std::numeric_limits<double>::infinity(), best_rel_gap_ = best_gap_, halved_gap_ = best_gap_;
   int stalled_ = 0;  // iterations since the gap last halved
   Verdict last_ = Verdict::go_on;
