@@ -251,14 +251,14 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
   for (;;) {
     iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12);
     const Eigen::Index p = Y.cols();
-    const bool can_climb = N * (2 * (p + 1) - 1) <= max_unknowns && p < N;
+    const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
     ComplexOutcome out = complex_outcome(H, std::move(Y), iterations, can_climb);
     out.certified = out.eigenvalues[0] >= -options.psd_tol;
     if (out.certified || !can_climb) return out;
     // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,
     // session 11: two save a level at N = 32 and 64 without slowing the next one).
     int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());
-    while (columns > 1 && N * (2 * (p + columns) - 1) > max_unknowns) --columns;
+    while (columns > 1 && complex_newton_unknowns(N, p + columns) > max_unknowns) --columns;
     Y = escape(H, out.Y, out.eigenvectors.leftCols(columns));
   }
 }

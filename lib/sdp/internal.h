@@ -254,9 +254,12 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
 // every eigenvalue of H − diag μ twice.
 Certificate complex_certificate(const ComplexOutcome& outcome);
 
+// Unknowns of complex Newton's system for Y ∈ ℂ^{N×p}: 2p − 1 tangent directions per unit row.
+inline Eigen::Index complex_newton_unknowns(Eigen::Index N, Eigen::Index p) { return N * (2 * p - 1); }
+
 // Riemannian staircase in ℂ: spectral start at p = 1, Newton, and while S has a negative
 // eigenvalue a column along its eigenvector, as long as the Newton system of the next rank
-// has at most max_unknowns unknowns (N·(2p − 1)).
+// has at most max_unknowns unknowns (complex_newton_unknowns).
 ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns);
 
 }  // namespace fact::sdp::detail

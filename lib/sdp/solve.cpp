@@ -125,8 +125,8 @@ Candidate candidate_of(const Eigen::MatrixXd& C, const detail::ComplexOutcome& o
 Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   const bool automatic = o.method == Method::automatic;
   const int max_unknowns = automatic ? kComplexMaxUnknowns : kMaxPolishSize;
-  const Eigen::Index N = C.rows() / 2;
-  if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, N * 3 > max_unknowns ? kOnlyLevelSteps : 25);
+  const bool only_level = detail::complex_newton_unknowns(C.rows() / 2, 2) > max_unknowns;  // rank 2 does not fit
+  if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, only_level ? kOnlyLevelSteps : 25);
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns);
   Candidate c = candidate_of(C, out, Method::complex_low_rank);
@@ -142,7 +142,7 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
 // (complex form only) for at most max_steps steps; nullopt when its system would exceed
 // kMaxComplexPolishSize.
 std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int iterations, int max_steps) {
-  if (Y.rows() * (2 * Y.cols() - 1) > kMaxComplexPolishSize) return std::nullopt;
+  if (detail::complex_newton_unknowns(Y.rows(), Y.cols()) > kMaxComplexPolishSize) return std::nullopt;
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
@@ -150,9 +150,8 @@ std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixX
 
 // The complex interior point on H (complex form, automatic mode), run to convergence. Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
-// rows renormalised) is feasible, so the pair certifies
-// without a polish; when the interior point stops short of the gap, complex Newton from its X
-// gets kComplexPolishSteps steps.
+// rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
+// stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
 Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o) {
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   const detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, 0.0);
