@@ -4,7 +4,8 @@
 // Λ_ii = y_i I₂, so this is the same relaxation in N×N complex arithmetic instead of 2N × 2N real
 // with 3N constraints: the Schur complement is N × N, against 3N × 3N.
 //
-// Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1), HKM direction,
+// Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1) or a handed-off
+// iterate to resume from, HKM direction,
 // Mehrotra predictor–corrector. With A(X)_i = Re X_ii and Aᵀ(y) = diag(y), ΔZ = −diag(Δy) is
 // diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)) (N × N
 // real symmetric), W = Z⁻¹ (N × N Hermitian). Step lengths come from a Lanczos estimate of the boundary,
@@ -154,12 +155,12 @@ double complementarity_after(const MatrixXcd& X, const MatrixXcd& dx, double a, 
 }  // namespace
 
 ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
-                                                         double handoff_gap) {
+                                                         double handoff_gap, const ComplexInteriorPointOutcome* resume) {
   const Eigen::Index N = H.rows();
   ComplexInteriorPointOutcome out;
   Workspace ws(N);
-  MatrixXcd X = MatrixXcd::Identity(N, N);  // primal, N × N Hermitian
-  VectorXd y = VectorXd::Constant(N, -2.0);  // dual, N
+  MatrixXcd X = resume ? resume->X : MatrixXcd::Identity(N, N);  // primal, N × N Hermitian
+  VectorXd y = resume ? resume->y : VectorXd::Constant(N, -2.0);  // dual, N
   MatrixXcd Z = H;                           // dual slack H − diag(y), N × N
   set_slack_diagonal(H, y, Z);
   const double tau = 0.95;
@@ -243,6 +244,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   X = root.asDiagonal() * X * root.asDiagonal();
   if (!out.converged && out.reason.empty())
     out.reason = "complex interior point reached " + std::to_string(options.max_ipm_iterations) + " iterations";
+  if (resume) out.iterations += resume->iterations;
   out.X = std::move(X);
   out.y = best_y;
   return out;

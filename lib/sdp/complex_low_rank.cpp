@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "internal.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 namespace {
@@ -171,7 +172,11 @@ Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C) {
   return H;
 }
 
-int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
+namespace {
+
+// Newton with the Hessian written out in the tangent bases: N·t × N·t real, factored densely.
+// Used at rank 1 (t = 1), where the system is N × N real and cheaper than the Schur form below.
+int dense_complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
   const Eigen::Index N = H.rows(), p = Y.cols();
   const int t = static_cast<int>(2 * p - 1);
   ComplexWorkspace ws(N, p, t);
@@ -196,6 +201,124 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
     f = f_kept;
   }
   return it;
+}
+
+
+// Every matrix of one Schur-form Newton run, allocated once (N × N complex unless noted).
+struct SchurWorkspace {
+  SchurWorkspace(Eigen::Index N, Eigen::Index p)
+      : HY(N, p), WY(N, p), next(N, p), next_HY(N, p), longer(N, p), longer_HY(N, p), S(N, N), L(N, N), L_inv(N, N),
+        W(N, N), X(N, N), M(N, N), llt(N), mu(N), r(N), nu(N) {}
+  MatrixXcd HY;              // H Y, N × p
+  MatrixXcd WY;              // W Y, N × p
+  MatrixXcd next, next_HY;   // trial factor and H · it, N × p
+  MatrixXcd longer, longer_HY;  // a longer trial along the same step and H · it, N × p
+  MatrixXcd S;               // H − diag(μ)
+  MatrixXcd L, L_inv;        // S + λI = L Lᴴ (lower triangle) and L⁻¹
+  MatrixXcd W;               // (S + λI)⁻¹
+  MatrixXcd X;               // Y Yᴴ
+  MatrixXd M;                // Schur complement Re(W_ij conj(X_ij)), N × N real
+  Eigen::LLT<MatrixXd> llt;  // its factor
+  VectorXd mu, r, nu;        // multipliers, Schur right-hand side, row multipliers of the step (N)
+};
+
+// f(Z) = tr(Zᴴ H Z) with ZH = H Z.
+double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
+
+// One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
+// N·t × N·t Hessian. The damped system (Hess + 2λ) V = −grad is
+//     (S + λI) V + diag(ν) Y = −S Y,   Re⟨y_i, v_i⟩ = 0 for every row i,
+// ν ∈ ℝᴺ the multipliers of the tangency constraints. With W = (S + λI)⁻¹ (needs S + λI ≻ 0) and
+// W S Y = Y − λ W Y, the constraints give M ν = −r, M_ij = Re(W_ij conj(X_ij)) with X = Y Yᴴ
+// (positive definite: the interior point's Schur complement), r_i = 1 − λ Re⟨y_i, (W Y)_i⟩, and
+// then Y + V = W diag(λ − ν) Y. ws.next gets its rows normalised (the retraction). False when
+// S + λI or M is not positive definite. Cost: one N × N complex factorisation, inversion and
+// product, and an N × N real factorisation, whatever p is.
+bool schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) {
+  const Eigen::Index N = Y.rows();
+  ws.L = ws.S;
+  ws.L.diagonal().array() += lambda;
+  if (Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(ws.L) != -1) return false;
+  invert_lower_factor(ws.L, ws.L_inv);
+  ws.W.noalias() = ws.L_inv.adjoint() * ws.L_inv;
+  ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
+  ws.llt.compute(ws.M);
+  if (ws.llt.info() != Eigen::Success) return false;
+  ws.WY.noalias() = ws.W * Y;
+  ws.r = VectorXd::Ones(N) - lambda * (Y.array().conjugate() * ws.WY.array()).real().rowwise().sum().matrix();
+  ws.nu = -ws.llt.solve(ws.r);
+  ws.nu = lambda - ws.nu.array();  // λ − ν
+  ws.next.noalias() = ws.W * (ws.nu.asDiagonal() * Y);
+  ws.next.rowwise().normalize();
+  return true;
+}
+
+// After an accepted step that lowered f by more than kExtendDecrease of |f| (the flat, indefinite
+// stretch after a staircase escape), steps of 2 and 4 times its length along V = next − Y, kept
+// while they lower f further; returns the f of the one kept (in ws.next, ws.next_HY).
+double extend_schur_step(const MatrixXcd& H, const MatrixXcd& Y, double f, double f_next, SchurWorkspace& ws) {
+  if (!(f - f_next > kExtendDecrease * std::abs(f))) return f_next;
+  for (double factor = 2.0; factor <= 4.0; factor *= 2.0) {
+    ws.longer = Y + factor * (ws.next - Y);
+    ws.longer.rowwise().normalize();
+    ws.longer_HY.noalias() = H * ws.longer;
+    const double f_longer = cost_of(ws.longer, ws.longer_HY);
+    if (!(f_longer < f_next)) break;
+    f_next = f_longer;
+    ws.next.swap(ws.longer);
+    ws.next_HY.swap(ws.longer_HY);
+  }
+  return f_next;
+}
+
+// Newton in Schur form (schur_newton_trial) for p ≥ 2, with the dense path's damping rule: λ
+// raised 10× while S + λI is not positive definite or the trial raises f, lowered 10× after a
+// step. With saddle_exit it returns early once S has an eigenvalue below −λ (a Cholesky failed
+// at that shift) while ‖grad‖ < λ: the negative curvature then dominates, the point is near a
+// saddle of the SDP at this rank, and converging to it only costs steps (the staircase escapes
+// instead; tight_noisy N = 12: 25 of 39 steps were spent there).
+int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit) {
+  const Eigen::Index N = H.rows();
+  SchurWorkspace ws(N, Y.cols());
+  ws.HY.noalias() = H * Y;
+  double f = cost_of(Y, ws.HY);
+  double lambda = 1e-8;
+  const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    ws.mu = (ws.HY.array() * Y.array().conjugate()).real().rowwise().sum();
+    const double grad_norm = 2.0 * (ws.HY - ws.mu.asDiagonal() * Y).norm();  // ‖2 S Y‖
+    if (grad_norm < grad_tol) break;
+    ws.S = H;
+    ws.S.diagonal() -= ws.mu.cast<std::complex<double>>();
+    ws.X.noalias() = Y * Y.adjoint();
+    double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
+    bool accepted = false;
+    for (int tries = 0; tries < 14 && !accepted; ++tries, lambda *= 10) {
+      if (!schur_newton_trial(Y, lambda, ws)) {
+        failed_shift = lambda;
+        continue;
+      }
+      if (saddle_exit && grad_norm < failed_shift) return it;
+      ws.next_HY.noalias() = H * ws.next;
+      const double f_next = cost_of(ws.next, ws.next_HY);
+      if (!(f_next <= f + noise)) continue;
+      f = extend_schur_step(H, Y, f, f_next, ws);
+      Y.swap(ws.next);
+      ws.HY.swap(ws.next_HY);
+      lambda = std::max(1e-13, lambda / 100);  // 10× below the accepted λ after the loop's ×10
+      accepted = true;
+    }
+    if (!accepted) break;
+  }
+  return it;
+}
+
+}  // namespace
+
+int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit) {
+  if (Y.cols() == 1) return dense_complex_newton(H, Y, max_iterations, grad_tol);
+  return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit);
 }
 
 namespace {
@@ -249,7 +372,7 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
   MatrixXcd Y = spectral_start(H);
   int iterations = 0;
   for (;;) {
-    iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12);
+    iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true);
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
     ComplexOutcome out = complex_outcome(H, std::move(Y), iterations, can_climb);

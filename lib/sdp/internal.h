@@ -206,8 +206,12 @@ Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C);
 // real_embedding uses it for square H), so emb(Y) emb(Y)ᵀ = emb(Y Yᴴ).
 Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y);
 // Damped Riemannian Newton on unit rows of Y (N × p complex) for tr(Yᴴ H Y), until
-// ‖grad‖ < grad_tol. Returns the steps taken.
-int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol);
+// ‖grad‖ < grad_tol. Returns the steps taken. At p = 1 the Hessian is formed in tangent bases
+// (N × N real); at p ≥ 2 each step solves the Newton system in Schur form through (S + λI)⁻¹
+// and an N × N real system, O(N³) whatever p is. With saddle_exit (p ≥ 2) it returns early
+// when S's negative curvature dominates the gradient (complex_low_rank.cpp).
+int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
+                   bool saddle_exit = false);
 
 struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
@@ -246,9 +250,11 @@ struct ComplexInteriorPointOutcome {
 
 // Primal–dual path following on the Hermitian N × N problem min Re tr(H X), X_ii = 1, X ⪰ 0
 // (complex_interior_point.cpp), HKM direction and Mehrotra corrector, stopping once the
-// relative gap is below handoff_gap (> 0: handed_off is set).
+// relative gap is below handoff_gap (> 0: handed_off is set). `resume` (an outcome that handed
+// off) continues from its X and y, which are strictly feasible, instead of X = I.
 ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
-                                                         double handoff_gap);
+                                                         double handoff_gap,
+                                                         const ComplexInteriorPointOutcome* resume = nullptr);
 
 // The certificate of the d = 2 problem on emb(H): Λ_ii = μ_i I₂, and S = emb(H − diag μ) has
 // every eigenvalue of H − diag μ twice.

@@ -39,13 +39,19 @@ constexpr int kComplexMaxUnknowns = 80;
 // so within 12 steps; the others crawl (f falling by a few % a step, the gradient not converging)
 // until the interior point takes over, 25 steps in 3 ms at N = 100 (BENCHMARKS.md, session 15).
 constexpr int kOnlyLevelSteps = 15;
-// The complex form's handoff, at any n: Newton in complex arithmetic gets kComplexPolishSteps
-// steps when its system has at most kMaxComplexPolishSize unknowns. In the benchmark 3, 2, 2 and
-// 4 steps certify tight_noisy at N = 32, 64, 100 and 200; at N = 200, p = 7, the system has 2600
-// unknowns and a step takes about 0.4 s, and it certifies an instance that the interior point
-// alone leaves at a gap of 4e-7.
+// The complex form's polish: Newton in complex arithmetic from the converged interior point's X
+// gets kComplexPolishSteps steps when that X does not certify by itself (at p ≥ 2 a step is
+// O(N³) in Schur form, whatever the rank).
 constexpr int kComplexPolishSteps = 4;
-constexpr int kMaxComplexPolishSize = 3000;
+// The complex interior point hands its iterate to Newton at a relative gap of kComplexHandoffGap:
+// X's factor down to kComplexHandoffCutoff has the optimum's rank there, and Newton in Schur form
+// certifies within kComplexHandoffSteps steps, where the interior point needs 5–7 more
+// iterations (tight_noisy N = 32 … 200: 13–14 iterations and 3–9 steps instead of 19–21
+// iterations; BENCHMARKS.md, session 16). When Newton does not certify, the interior point
+// resumes from the iterate it handed off.
+constexpr double kComplexHandoffGap = 1e-3;
+constexpr double kComplexHandoffCutoff = 1e-2;
+constexpr int kComplexHandoffSteps = 10;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -139,10 +145,8 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
 }
 
 // Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
-// (complex form only) for at most max_steps steps; nullopt when its system would exceed
-// kMaxComplexPolishSize.
-std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int iterations, int max_steps) {
-  if (detail::complex_newton_unknowns(Y.rows(), Y.cols()) > kMaxComplexPolishSize) return std::nullopt;
+// (complex form only) for at most max_steps steps.
+Candidate complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int iterations, int max_steps) {
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
@@ -154,14 +158,23 @@ std::optional<Candidate> complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixX
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
 Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o) {
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
-  const detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, 0.0);
+  detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
+  if (ip.handed_off) {
+    Eigen::MatrixXcd Y = detail::complex_factor(ip.X, kComplexHandoffCutoff);
+    const int steps = detail::complex_newton(H, Y, kComplexHandoffSteps, 1e-12);
+    Candidate handed = candidate_of(C, detail::complex_outcome(H, std::move(Y), ip.iterations + steps, false),
+                                    Method::interior_point);
+    if (is_certified(handed, o)) return handed;
+    ip.iterations += steps;
+    ip = detail::solve_complex_interior_point(H, o, 0.0, &ip);
+  }
   Candidate c = candidate_of(C, detail::complex_outcome(H, detail::complex_factor(ip.X, kComplexFactorCutoff), ip.y,
                                                         ip.iterations, false),
                              Method::interior_point);
   c.note = ip.reason;
   if (is_certified(c, o)) return c;
-  std::optional<Candidate> polished = complex_polish(C, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
-  return polished && is_certified(*polished, o) ? *polished : c;
+  Candidate polished = complex_polish(C, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
+  return is_certified(polished, o) ? polished : c;
 }
 
 Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPointOutcome& ip) {
