@@ -98,4 +98,33 @@ TEST(SdpComplexInteriorPoint, ConvergesToTheRealInteriorPointsOptimumWithAFeasib
   }
 }
 
+// The complex interior point handed off at the automatic mode's gap (1e-3) and resumed from its
+// iterate ends where one uninterrupted run ends, with the handed-off iterations counted.
+TEST(SdpComplexInteriorPoint, HandsOffAndResumesToWhereOneRunEnds) {
+  for (int drones : {12, 32}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
+    const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+    const Options o;
+    const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
+      return (H.array() * ip.X.array().conjugate()).real().sum();
+    };
+    const ComplexInteriorPointOutcome whole = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
+    const ComplexInteriorPointOutcome early = fact::sdp::detail::solve_complex_interior_point(H, o, 1e-3);
+    ASSERT_TRUE(early.handed_off) << early.reason;
+    EXPECT_FALSE(early.converged);
+    const double early_gap = (objective(early) - early.y.sum()) / std::abs(objective(early));
+    EXPECT_LT(early_gap, 1e-3);
+    EXPECT_GT(early_gap, o.gap_tol);
+
+    const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &early);
+    EXPECT_TRUE(rest.converged) << rest.reason;
+    EXPECT_GT(rest.iterations, early.iterations);  // the resumed run counts the handed-off iterations
+    EXPECT_LE(rest.iterations, whole.iterations + 3);
+    EXPECT_LT((rest.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
+    EXPECT_NEAR(objective(rest), objective(whole), 1e-9 * std::abs(objective(whole)));
+    EXPECT_NEAR(rest.y.sum(), whole.y.sum(), 1e-9 * std::abs(objective(whole)));
+  }
+}
+
 }  // namespace

@@ -79,6 +79,13 @@ void hermitian_part(MatrixXcd& A) {
 // iterations on tight_noisy N = 32 … 200 were the same and the interior point took 12–30 % longer
 // (BENCHMARKS.md, sessions 12 and 13).
 constexpr int kLanczosSteps = 8;
+// The predictor's step lengths only set σ = (μ_aff/μ)³, and nothing is factored at them: 4
+// Lanczos steps are enough (tight_noisy N = 24 … 100: the same iterations, 4–8 % less time
+// than with 8; BENCHMARKS.md, session 16).
+constexpr int kPredictorLanczosSteps = 4;
+
+// The predictor (τ = 1) and the corrector (τ < 1) take different numbers of Lanczos steps.
+int lanczos_steps(double tau) { return tau >= 1.0 ? kPredictorLanczosSteps : kLanczosSteps; }
 
 // min(1, τ·α_max) for P + α Δ ⪰ 0 (P = L Lᴴ): α_max = −1/λ_min(L⁻¹ Δ L⁻ᴴ), where `lowest` is
 // Lanczos's estimate of that λ_min. With τ < 1 the step is confirmed by a Cholesky test of
@@ -99,7 +106,7 @@ double step_length(double lowest, double tau, Workspace& ws, ComplexCholesky& ne
 // fast as products with an explicit Lx⁻¹ here, which would cost an inversion).
 double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, double tau) {
   const auto L = ws.chol_x.lower();
-  const double lowest = lanczos_lowest<Eigen::VectorXcd>(X.rows(), kLanczosSteps, [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(X.rows(), lanczos_steps(tau), [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
     ws.u = L.adjoint().solve(v);  // Lx⁻ᴴ v
     w.noalias() = dx * ws.u;
     L.solveInPlace(w);  // Lx⁻¹ ΔX Lx⁻ᴴ v
@@ -116,7 +123,7 @@ void set_slack_diagonal(const MatrixXcd& H, const VectorXd& y, MatrixXcd& Z) {
 // The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y); the trial is H − diag(y + α Δy).
 // Lanczos on Lz⁻¹ ΔZ Lz⁻ᴴ through the explicit Lz⁻¹ (products, treated as dense).
 double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, const VectorXd& dy, Workspace& ws, double tau) {
-  const double lowest = lanczos_lowest<Eigen::VectorXcd>(Z.rows(), kLanczosSteps, [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+  const double lowest = lanczos_lowest<Eigen::VectorXcd>(Z.rows(), lanczos_steps(tau), [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
     ws.u.noalias() = ws.Lz_inv.adjoint() * v;   // Lz⁻ᴴ v
     ws.u.array() *= -dy.array();                // ΔZ Lz⁻ᴴ v
     w.noalias() = ws.Lz_inv * ws.u;             // Lz⁻¹ ΔZ Lz⁻ᴴ v
