@@ -41,7 +41,7 @@ struct ComplexWorkspace {
   ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
       : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p),
         gram(N * t <= kGramHessianMaxSize ? N * t : 0, N * t <= kGramHessianMaxSize ? N * t : 0), Hm(N * t, N * t),
-        llt(N * t), g(N * t), eta(N * t), v(p), next(N, p), next_HY(N, p), kept(N, p), kept_HY(N, p) {}
+        llt(N * t), g(N * t), eta(N * t), v(p), next(N, p), next_HY(N, p) {}
   MatrixXcd HY;     // H Y, N × p
   VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
   MatrixXcd S;      // H − diag(μ), N × N
@@ -56,7 +56,6 @@ struct ComplexWorkspace {
   Eigen::VectorXcd v;  // Householder vector of one row (tangent_bases), p
   MatrixXcd next;   // trial factor, N × p
   MatrixXcd next_HY;  // H · next, N × p
-  MatrixXcd kept, kept_HY;  // the accepted trial and H · it while a longer one is tried, N × p
 };
 
 // μ, S and S Y for the current Y (ws.HY = H Y already).
@@ -121,25 +120,12 @@ double trial_step(const MatrixXcd& H, const MatrixXcd& Y, int t, ComplexWorkspac
   return (ws.next_HY.array() * ws.next.array().conjugate()).real().sum();
 }
 
-// Above rank 1, after a Newton step to f_next (in ws.next) that lowered f by more than
-// kExtendDecrease of |f|, one trial of twice the step, kept when it lowers f further; returns the
-// f of the step kept (in ws.next, ws.next_HY). On the flat, indefinite stretch after a staircase
-// escape the damped step is short and the longer one gains (tight_noisy N = 5: 28 → 19 steps,
-// BENCHMARKS.md, session 13); near the optimum the decrease is below kExtendDecrease and nothing
-// is tried. At rank 1 Newton runs from the spectral start, where the trial only costs (+5 % on
-// tight_noisy N = 8 and 16).
+// Above rank 1, a step that lowered f by more than kExtendDecrease of |f| is tried longer
+// (extend_schur_step): on the flat, indefinite stretch after a staircase escape the damped step is
+// short and a longer one gains (tight_noisy N = 5: 28 → 19 steps with the dense Hessian,
+// BENCHMARKS.md, session 13; N = 6 in Schur form: 30 → 22, session 16); near the optimum the
+// decrease is below kExtendDecrease and nothing is tried.
 constexpr double kExtendDecrease = 1e-3;
-double extend_step(const MatrixXcd& H, const MatrixXcd& Y, int t, double f, double f_next, ComplexWorkspace& ws) {
-  if (Y.cols() == 1 || !(f - f_next > kExtendDecrease * std::abs(f))) return f_next;
-  ws.kept.swap(ws.next);
-  ws.kept_HY.swap(ws.next_HY);
-  ws.eta *= 2.0;
-  const double f_longer = trial_step(H, Y, t, ws);
-  if (f_longer < f_next) return f_longer;
-  ws.next.swap(ws.kept);
-  ws.next_HY.swap(ws.kept_HY);
-  return f_next;
-}
 
 }  // namespace
 
@@ -195,14 +181,12 @@ int dense_complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max
     const double f_next = damped_newton_step(ws.Hm, ws.llt, ws.g, ws.eta, damping, f, noise,
                                              [&](const VectorXd&) { return trial_step(H, Y, t, ws); });
     if (std::isnan(f_next)) break;
-    const double f_kept = extend_step(H, Y, t, f, f_next, ws);
     Y.swap(ws.next);
     ws.HY.swap(ws.next_HY);
-    f = f_kept;
+    f = f_next;
   }
   return it;
 }
-
 
 // Every matrix of one Schur-form Newton run, allocated once (N × N complex unless noted).
 struct SchurWorkspace {
@@ -231,26 +215,28 @@ double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z
 // ν ∈ ℝᴺ the multipliers of the tangency constraints. With W = (S + λI)⁻¹ (needs S + λI ≻ 0) and
 // W S Y = Y − λ W Y, the constraints give M ν = −r, M_ij = Re(W_ij conj(X_ij)) with X = Y Yᴴ
 // (positive definite: the interior point's Schur complement), r_i = 1 − λ Re⟨y_i, (W Y)_i⟩, and
-// then Y + V = W diag(λ − ν) Y. ws.next gets its rows normalised (the retraction). False when
-// S + λI or M is not positive definite. Cost: one N × N complex factorisation, inversion and
-// product, and an N × N real factorisation, whatever p is.
-bool schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) {
+// then Y + V = W diag(λ − ν) Y. ws.next gets its rows normalised (the retraction). Cost: one
+// N × N complex factorisation, inversion and product, and an N × N real factorisation, whatever
+// p is. M is positive definite in exact arithmetic whenever S + λI is (Schur product theorem);
+// its factorisation fails only by rounding.
+enum class Trial { formed, shift_too_small, schur_not_definite };
+Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) {
   const Eigen::Index N = Y.rows();
   ws.L = ws.S;
   ws.L.diagonal().array() += lambda;
-  if (Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(ws.L) != -1) return false;
+  if (Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(ws.L) != -1) return Trial::shift_too_small;
   invert_lower_factor(ws.L, ws.L_inv);
   ws.W.noalias() = ws.L_inv.adjoint() * ws.L_inv;
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
   ws.llt.compute(ws.M);
-  if (ws.llt.info() != Eigen::Success) return false;
+  if (ws.llt.info() != Eigen::Success) return Trial::schur_not_definite;
   ws.WY.noalias() = ws.W * Y;
   ws.r = VectorXd::Ones(N) - lambda * (Y.array().conjugate() * ws.WY.array()).real().rowwise().sum().matrix();
   ws.nu = -ws.llt.solve(ws.r);
   ws.nu = lambda - ws.nu.array();  // λ − ν
   ws.next.noalias() = ws.W * (ws.nu.asDiagonal() * Y);
   ws.next.rowwise().normalize();
-  return true;
+  return Trial::formed;
 }
 
 // After an accepted step that lowered f by more than kExtendDecrease of |f| (the flat, indefinite
@@ -295,10 +281,9 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
     double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
     bool accepted = false;
     for (int tries = 0; tries < 14 && !accepted; ++tries, lambda *= 10) {
-      if (!schur_newton_trial(Y, lambda, ws)) {
-        failed_shift = lambda;
-        continue;
-      }
+      const Trial trial = schur_newton_trial(Y, lambda, ws);
+      if (trial == Trial::shift_too_small) failed_shift = lambda;
+      if (trial != Trial::formed) continue;
       if (saddle_exit && grad_norm < failed_shift) return it;
       ws.next_HY.noalias() = H * ws.next;
       const double f_next = cost_of(ws.next, ws.next_HY);

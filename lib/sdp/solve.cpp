@@ -152,7 +152,8 @@ Candidate complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int itera
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
 }
 
-// The complex interior point on H (complex form, automatic mode), run to convergence. Its dual y
+// The complex interior point on H (complex form, automatic mode), handed to complex Newton at
+// kComplexHandoffGap and, when that does not certify, resumed and run to convergence. Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
 // rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
