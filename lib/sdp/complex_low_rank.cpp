@@ -90,10 +90,18 @@ void tangent_bases(const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
   }
 }
 
-// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ). Block row by block row: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ) with
+// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ). At rank 1 (one direction a row) entry by entry, without the
+// Gram matrix and its N² one-entry blocks (2/3 of a rank-1 Newton step at N = 100). Block row by block row: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ) with
 // B_i row block i of basis (t × p) and K_i = basis with row block j scaled by 2 S_ij (N·t × p),
 // only the blocks j ≤ i (the factorisation reads the lower triangle).
 void hessian(Eigen::Index N, int t, ComplexWorkspace& ws) {
+  if (t == 1 && ws.basis.cols() == 1) {  // rank 1: Hm_ij = 2 Re(S_ij conj(b_i) b_j), entry by entry
+    for (Eigen::Index j = 0; j < N; ++j) {
+      const std::complex<double> bj = 2.0 * ws.basis(j, 0);
+      for (Eigen::Index i = j; i < N; ++i) ws.Hm(i, j) = (ws.S(i, j) * std::conj(ws.basis(i, 0)) * bj).real();
+    }
+    return;
+  }
   if (N * t <= kGramHessianMaxSize) {
     ws.gram.noalias() = ws.basis.conjugate() * ws.basis.transpose();
     for (Eigen::Index j = 0; j < N; ++j)
@@ -352,7 +360,20 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, in
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
-ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns) {
+namespace {
+
+// True when S = H − diag(μ) + shift·I is positive definite (a Cholesky factorisation, N³/3
+// complex, against the eigendecomposition's ~4N³).
+bool shifted_positive_definite(const MatrixXcd& H, const VectorXd& mu, double shift) {
+  MatrixXcd S = H;  // H − diag(μ) + shift·I, N × N, factored in place
+  S.diagonal().array() += shift - mu.array();
+  return Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(S) == -1;
+}
+
+}  // namespace
+
+ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns,
+                                      bool spectrum_if_not_psd) {
   const Eigen::Index N = H.rows();
   MatrixXcd Y = spectral_start(H);
   int iterations = 0;
@@ -360,6 +381,16 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true);
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
+    if (!can_climb && !spectrum_if_not_psd) {
+      ComplexOutcome out;
+      out.mu = (H * Y).cwiseProduct(Y.conjugate()).real().rowwise().sum();
+      // λ_min(S) < −2·psd_tol (up to rounding): not certified, and no spectrum is computed.
+      if (!shifted_positive_definite(H, out.mu, 2.0 * options.psd_tol)) {
+        out.Y = std::move(Y);
+        out.iterations = iterations;
+        return out;
+      }
+    }
     ComplexOutcome out = complex_outcome(H, std::move(Y), iterations, can_climb);
     out.certified = out.eigenvalues[0] >= -options.psd_tol;
     if (out.certified || !can_climb) return out;
@@ -415,12 +446,14 @@ Certificate complex_certificate(const ComplexOutcome& outcome) {
   const Eigen::Index N = outcome.mu.size();
   Certificate cert;
   cert.lambda = Eigen::MatrixXd::Zero(2 * N, 2);  // Λ_ii = μ_i I₂ stacked, 2N × 2
-  cert.eigenvalues.resize(2 * N);
-  for (Eigen::Index i = 0; i < N; ++i) {
-    cert.lambda(2 * i, 0) = cert.lambda(2 * i + 1, 1) = outcome.mu[i];
-    cert.eigenvalues[2 * i] = cert.eigenvalues[2 * i + 1] = outcome.eigenvalues[i];
-  }
+  for (Eigen::Index i = 0; i < N; ++i) cert.lambda(2 * i, 0) = cert.lambda(2 * i + 1, 1) = outcome.mu[i];
   cert.trace_lambda = 2.0 * outcome.mu.sum();
+  if (outcome.eigenvalues.size() == 0) {  // no spectrum (S failed its Cholesky test): no bound
+    cert.min_eig = cert.dual_bound = -std::numeric_limits<double>::infinity();
+    return cert;
+  }
+  cert.eigenvalues.resize(2 * N);
+  for (Eigen::Index i = 0; i < N; ++i) cert.eigenvalues[2 * i] = cert.eigenvalues[2 * i + 1] = outcome.eigenvalues[i];
   bound_from_spectrum(cert);
   return cert;
 }

@@ -76,12 +76,25 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const auto full_decomposition = [&] { return Matrix(Eigen::SelfAdjointEigenSolver<Matrix>(M).eigenvectors().leftCols(k)); };
   if (n <= full_up_to) return full_decomposition();  // small: the full decomposition is as cheap
   const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
-  const Eigen::LLT<Matrix> chol(M + shift * Matrix::Identity(n, n));
-  if (chol.info() != Eigen::Success) return full_decomposition();
+  // M + δI = L Lᴴ in place by Eigen's blocked kernel (Eigen::LLT would also sum |m_ij| for a
+  // condition estimate: a hypot per complex entry, a third of this function at n = 100).
+  Matrix L = M;  // n × n, the factor in its lower triangle
+  L.diagonal().array() += shift;
+  using Scalar = typename Matrix::Scalar;
+  if (Eigen::internal::llt_inplace<Scalar, Eigen::Lower>::blocked(L) != -1) return full_decomposition();
+  const auto lower = L.template triangularView<Eigen::Lower>();
   Matrix V(n, k + 2);  // deterministic start, n × (k + 2)
   for (Eigen::Index i = 0; i < n; ++i)
     for (Eigen::Index j = 0; j < V.cols(); ++j) V(i, j) = std::sin(1.0 + i * (j + 1.618) + 0.37 * j);
-  for (int step = 0; step < 12; ++step) V = chol.solve(V).householderQr().householderQ() * Matrix::Identity(n, V.cols());
+  for (int step = 0; step < 12; ++step) {
+    lower.solveInPlace(V);             // L⁻¹ V
+    lower.adjoint().solveInPlace(V);   // (M + δI)⁻¹ V
+    for (Eigen::Index j = 0; j < V.cols(); ++j) {  // orthonormal columns, Gram–Schmidt twice
+      for (int pass = 0; pass < 2; ++pass)
+        for (Eigen::Index i = 0; i < j; ++i) V.col(j) -= V.col(i).dot(V.col(j)) * V.col(i);
+      V.col(j).normalize();
+    }
+  }
   const Matrix T = V.adjoint() * M * V;  // Rayleigh–Ritz on the subspace, (k + 2) × (k + 2)
   Eigen::SelfAdjointEigenSolver<Matrix> small(T);
   return V * small.eigenvectors().leftCols(k);
@@ -216,7 +229,7 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
   Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
-  Eigen::VectorXd eigenvalues;  // of S = H − diag(μ), ascending, N
+  Eigen::VectorXd eigenvalues;  // of S = H − diag(μ), ascending, N (empty: not computed)
   Eigen::MatrixXcd eigenvectors;  // of S, N × N, only when asked for
   int iterations = 0;           // Newton steps, all levels
   bool certified = false;       // λ_min(S) ≥ −psd_tol
@@ -257,7 +270,8 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
                                                          const ComplexInteriorPointOutcome* resume = nullptr);
 
 // The certificate of the d = 2 problem on emb(H): Λ_ii = μ_i I₂, and S = emb(H − diag μ) has
-// every eigenvalue of H − diag μ twice.
+// every eigenvalue of H − diag μ twice. An outcome without eigenvalues gives λ_min and the
+// bound −∞.
 Certificate complex_certificate(const ComplexOutcome& outcome);
 
 // Unknowns of complex Newton's system for Y ∈ ℂ^{N×p}: 2p − 1 tangent directions per unit row.
@@ -265,7 +279,10 @@ inline Eigen::Index complex_newton_unknowns(Eigen::Index N, Eigen::Index p) { re
 
 // Riemannian staircase in ℂ: spectral start at p = 1, Newton, and while S has a negative
 // eigenvalue a column along its eigenvector, as long as the Newton system of the next rank
-// has at most max_unknowns unknowns (complex_newton_unknowns).
-ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns);
+// has at most max_unknowns unknowns (complex_newton_unknowns). Without spectrum_if_not_psd, a
+// last level whose S fails a Cholesky test at a shift of 2·psd_tol (so it cannot certify)
+// returns without eigenvalues (its certificate then has no bound: complex_certificate).
+ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns,
+                                      bool spectrum_if_not_psd = true);
 
 }  // namespace fact::sdp::detail

@@ -134,7 +134,9 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   const bool only_level = detail::complex_newton_unknowns(C.rows() / 2, 2) > max_unknowns;  // rank 2 does not fit
   if (automatic) o.max_newton_iterations = std::min(o.max_newton_iterations, only_level ? kOnlyLevelSteps : 25);
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
-  detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns);
+  // In automatic mode a last level that cannot certify skips its spectrum: the interior point
+  // follows and its certificate replaces this one's (0.6 ms at N = 100, 3.2 ms at N = 200).
+  detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns, !automatic);
   Candidate c = candidate_of(C, out, Method::complex_low_rank);
   if (!misses_only_the_gap(c, o)) return c;
   const int steps = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as in from_low_rank
@@ -350,7 +352,10 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
       std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60);
       if (polished && is_certified(*polished, options)) ip = std::move(*polished);
     }
-    if (!try_low_rank || is_certified(ip, options) || ip.cert.dual_bound > best.cert.dual_bound) best = ip;
+    // (a staircase outcome without a spectrum has no bound: the interior point's result replaces it)
+    if (!try_low_rank || is_certified(ip, options) || ip.cert.dual_bound > best.cert.dual_bound ||
+        best.cert.eigenvalues.size() == 0)
+      best = ip;
   }
   int rank = numerical_rank(best.Y);
   if (options.method == Method::automatic && rank > d) {
