@@ -10,9 +10,9 @@
 //   certificate    S = H − diag(μ), N × N Hermitian      (the d = 2 one is emb(S))
 //   gradient       grad f = 2 S Y (row by row tangent to the sphere)
 //   Hessian        Hess f[V] = Proj_Y(2 S V)
-// Row i's tangent space {w ∈ ℂ^p : Re w y_iᴴ = 0} has real dimension t = 2p − 1 and the
-// orthonormal basis i·y_i, u_k, i·u_k (u_k, k < p − 1, a unitary complement of y_i). The
-// Newton system is N·t × N·t real, against (2·2p − 3)·N for the same rank in the d = 2 form.
+// Row i's tangent space is {w ∈ ℂ^p : Re w y_iᴴ = 0} (real dimension 2p − 1). At rank 1 it is
+// spanned by i·y_i and the Newton system is N × N real (rank_one_newton); above rank 1 the system
+// is solved in Schur form through (S + λI)⁻¹ (schur_complex_newton), O(N³) whatever p is.
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -30,102 +30,46 @@ using Eigen::VectorXd;
 constexpr std::complex<double> kI{0.0, 1.0};
 constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 
-// Largest Newton system whose Hessian is built from the whole Gram matrix conj(basis) basisᵀ in
-// one product; above it, block row by block row, which needs no N·t × N·t complex matrix (13 MB,
-// zeroed by the product and page-faulted on every call, at N = 100, p = 5: BENCHMARKS.md,
-// session 12) but makes N small products, whose per-call overhead the one product avoids at small N.
-constexpr Eigen::Index kGramHessianMaxSize = 256;
+// f(Z) = tr(Zᴴ H Z) with ZH = H Z.
+double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
 
-// Every matrix of one Newton run at rank p, allocated once. N rows, t = 2p − 1.
-struct ComplexWorkspace {
-  ComplexWorkspace(Eigen::Index N, Eigen::Index p, int t)
-      : HY(N, p), mu(N), S(N, N), SY(N, p), basis(N * t, p), scaled(N * t, p),
-        gram(N * t <= kGramHessianMaxSize ? N * t : 0, N * t <= kGramHessianMaxSize ? N * t : 0), Hm(N * t, N * t),
-        llt(N * t), g(N * t), eta(N * t), v(p), next(N, p), next_HY(N, p) {}
-  MatrixXcd HY;     // H Y, N × p
-  VectorXd mu;      // μ_i = Re (H Y)_i y_iᴴ, N
-  MatrixXcd S;      // H − diag(μ), N × N
-  MatrixXcd SY;     // S Y, N × p
-  MatrixXcd basis;  // row i·t + a: tangent direction a of row i (a p-vector), N·t × p
-  MatrixXcd scaled;  // row block j of basis times 2·S_ij for the current block row i, N·t × p
-  MatrixXcd gram;    // conj(basis) basisᵀ, N·t × N·t when N·t ≤ kGramHessianMaxSize, else empty
-  MatrixXd Hm;      // Hessian in the bases: 2 Re(S_ij ⟨b_ia, b_jb⟩), ⟨u, v⟩ = conj(u)·vᵀ, N·t × N·t
-  Eigen::LLT<MatrixXd> llt;  // factor of Hm + μ_LM I
-  VectorXd g;       // gradient coefficients 2 Re⟨b_ia, (S Y)_i⟩, N·t
-  VectorXd eta;     // Newton step coefficients, N·t
-  Eigen::VectorXcd v;  // Householder vector of one row (tangent_bases), p
-  MatrixXcd next;   // trial factor, N × p
-  MatrixXcd next_HY;  // H · next, N × p
+// Every matrix of one rank-1 Newton run, allocated once. Y = z ∈ ℂᴺ (N × 1) with |z_i| = 1, and
+// row i's one tangent direction is b_i = i·z_i.
+struct RankOneWorkspace {
+  explicit RankOneWorkspace(Eigen::Index N)
+      : HY(N, 1), SY(N, 1), next(N, 1), next_HY(N, 1), mu(N), S(N, N), Hm(N, N), llt(N), g(N), eta(N) {}
+  MatrixXcd HY, SY;          // H z and S z = H z − diag(μ) z, N × 1
+  MatrixXcd next, next_HY;   // trial z and H · it, N × 1
+  VectorXd mu;               // μ_i = Re((H z)_i conj(z_i)), N
+  MatrixXcd S;               // H − diag(μ), N × N
+  MatrixXd Hm;               // Hessian 2 Re(S_ij conj(b_i) b_j), N × N (the lower triangle is read)
+  Eigen::LLT<MatrixXd> llt;  // factor of Hm + damping·I
+  VectorXd g;                // gradient coefficients 2 Re(conj(b_i) (S z)_i), N
+  VectorXd eta;              // Newton step coefficients, N
 };
 
-// μ, S and S Y for the current Y (ws.HY = H Y already).
-void multipliers(const MatrixXcd& H, const MatrixXcd& Y, ComplexWorkspace& ws) {
+// μ, S, S z, the gradient and the Hessian at z (ws.HY = H z already).
+void rank_one_system(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& ws) {
+  const Eigen::Index N = Y.rows();
   ws.mu = (ws.HY.array() * Y.array().conjugate()).real().rowwise().sum();
   ws.S = H;
   ws.S.diagonal() -= ws.mu.cast<std::complex<double>>();
   ws.SY = ws.HY - ws.mu.asDiagonal() * Y;
-}
-
-// Orthonormal tangent basis of every row into ws.basis (rows i·t … i·t + t − 1). The complement
-// u_k of a unit row y comes from the Householder reflection F = I − v vᴴ / (1 + |y_0|),
-// v = yᵀ + e^{i arg y_0} e_0 (p-vector, ‖v‖² = 2(1 + |y_0|)): F is unitary and Hermitian with
-// F yᵀ = −e^{i arg y_0} e_0, so its columns k ≥ 1 are orthonormal and orthogonal to yᵀ. In
-// closed form, O(p²) a row: a HouseholderQR object per row cost 17 % of tight_noisy N = 5.
-void tangent_bases(const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
-  const Eigen::Index N = Y.rows(), p = Y.cols();
-  for (Eigen::Index i = 0; i < N; ++i) {
-    ws.basis.row(i * t) = kI * Y.row(i);
-    if (p == 1) continue;
-    const double a0 = std::abs(Y(i, 0));
-    const std::complex<double> phase = a0 > 0 ? Y(i, 0) / a0 : std::complex<double>(1.0);
-    ws.v = Y.row(i).transpose();  // p
-    ws.v[0] += phase;
-    const double scale = 1.0 / (1.0 + a0);
-    for (Eigen::Index k = 1; k < p; ++k) {
-      auto u = ws.basis.row(i * t + 2 * k - 1);  // column k of F, as a row
-      u = (-scale * std::conj(ws.v[k])) * ws.v.transpose();
-      u[k] += 1.0;
-      ws.basis.row(i * t + 2 * k) = kI * u;
-    }
+  for (Eigen::Index i = 0; i < N; ++i) ws.g[i] = 2.0 * (std::conj(kI * Y(i, 0)) * ws.SY(i, 0)).real();
+  for (Eigen::Index j = 0; j < N; ++j) {
+    const std::complex<double> bj = 2.0 * kI * Y(j, 0);
+    for (Eigen::Index i = j; i < N; ++i) ws.Hm(i, j) = (ws.S(i, j) * std::conj(kI * Y(i, 0)) * bj).real();
   }
 }
 
-// Hm = 2 Re(S_ij conj(b_ia)·b_jbᵀ). At rank 1 (one direction a row) entry by entry, without the
-// Gram matrix and its N² one-entry blocks (2/3 of a rank-1 Newton step at N = 100). Block row by block row: Hm_(i·)(·) = Re(conj(B_i) K_iᵀ) with
-// B_i row block i of basis (t × p) and K_i = basis with row block j scaled by 2 S_ij (N·t × p),
-// only the blocks j ≤ i (the factorisation reads the lower triangle).
-void hessian(Eigen::Index N, int t, ComplexWorkspace& ws) {
-  if (t == 1 && ws.basis.cols() == 1) {  // rank 1: Hm_ij = 2 Re(S_ij conj(b_i) b_j), entry by entry
-    for (Eigen::Index j = 0; j < N; ++j) {
-      const std::complex<double> bj = 2.0 * ws.basis(j, 0);
-      for (Eigen::Index i = j; i < N; ++i) ws.Hm(i, j) = (ws.S(i, j) * std::conj(ws.basis(i, 0)) * bj).real();
-    }
-    return;
-  }
-  if (N * t <= kGramHessianMaxSize) {
-    ws.gram.noalias() = ws.basis.conjugate() * ws.basis.transpose();
-    for (Eigen::Index j = 0; j < N; ++j)
-      for (Eigen::Index i = j; i < N; ++i)
-        ws.Hm.block(i * t, j * t, t, t) = ((2.0 * ws.S(i, j)) * ws.gram.block(i * t, j * t, t, t).array()).real();
-    return;
-  }
-  for (Eigen::Index i = 0; i < N; ++i) {
-    const Eigen::Index width = (i + 1) * t;
-    for (Eigen::Index j = 0; j <= i; ++j) ws.scaled.middleRows(j * t, t) = (2.0 * ws.S(i, j)) * ws.basis.middleRows(j * t, t);
-    ws.Hm.block(i * t, 0, t, width).noalias() =
-        (ws.basis.middleRows(i * t, t).conjugate() * ws.scaled.topRows(width).transpose()).real();
-  }
-}
-
-// ws.next = rows of Y moved by η and normalised; returns f(next) (ws.next_HY = H next).
-double trial_step(const MatrixXcd& H, const MatrixXcd& Y, int t, ComplexWorkspace& ws) {
-  ws.next = Y;
+// ws.next = z with row i moved by η_i b_i and normalised; returns f(next) (ws.next_HY = H next).
+double rank_one_trial(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& ws) {
   for (Eigen::Index i = 0; i < Y.rows(); ++i) {
-    for (int a = 0; a < t; ++a) ws.next.row(i) += ws.eta[i * t + a] * ws.basis.row(i * t + a);
-    ws.next.row(i).normalize();
+    const std::complex<double> moved = Y(i, 0) + ws.eta[i] * (kI * Y(i, 0));
+    ws.next(i, 0) = moved / std::sqrt(std::norm(moved));
   }
   ws.next_HY.noalias() = H * ws.next;
-  return (ws.next_HY.array() * ws.next.array().conjugate()).real().sum();
+  return cost_of(ws.next, ws.next_HY);
 }
 
 // Above rank 1, a step that lowered f by more than kExtendDecrease of |f| is tried longer
@@ -168,26 +112,21 @@ Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C) {
 
 namespace {
 
-// Newton with the Hessian written out in the tangent bases: N·t × N·t real, factored densely.
-// Used at rank 1 (t = 1), where the system is N × N real and cheaper than the Schur form below.
-int dense_complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
-  const Eigen::Index N = H.rows(), p = Y.cols();
-  const int t = static_cast<int>(2 * p - 1);
-  ComplexWorkspace ws(N, p, t);
+// Damped Newton at rank 1, the N × N real system factored densely (cheaper than the Schur form
+// there).
+int rank_one_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol) {
+  const Eigen::Index N = H.rows();
+  RankOneWorkspace ws(N);
   double damping = 1e-8;  // Levenberg–Marquardt shift of the Newton system
   ws.HY.noalias() = H * Y;
-  double f = (ws.HY.array() * Y.array().conjugate()).real().sum();  // tr(Yᴴ H Y)
+  double f = cost_of(Y, ws.HY);  // tr(Yᴴ H Y)
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    multipliers(H, Y, ws);
-    tangent_bases(Y, t, ws);
-    for (Eigen::Index i = 0; i < N; ++i)  // 2 Re⟨b_ia, (S Y)_i⟩
-      for (int a = 0; a < t; ++a) ws.g[i * t + a] = 2.0 * ws.basis.row(i * t + a).dot(ws.SY.row(i)).real();
+    rank_one_system(H, Y, ws);
     if (ws.g.norm() < grad_tol) break;
-    hessian(N, t, ws);
     const double f_next = damped_newton_step(ws.Hm, ws.llt, ws.g, ws.eta, damping, f, noise,
-                                             [&](const VectorXd&) { return trial_step(H, Y, t, ws); });
+                                             [&](const VectorXd&) { return rank_one_trial(H, Y, ws); });
     if (std::isnan(f_next)) break;
     Y.swap(ws.next);
     ws.HY.swap(ws.next_HY);
@@ -213,9 +152,6 @@ struct SchurWorkspace {
   Eigen::LLT<MatrixXd> llt;  // its factor
   VectorXd mu, r, nu;        // multipliers, Schur right-hand side, row multipliers of the step (N)
 };
-
-// f(Z) = tr(Zᴴ H Z) with ZH = H Z.
-double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
 
 // One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
 // N·t × N·t Hessian. The damped system (Hess + 2λ) V = −grad is
@@ -310,7 +246,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
 }  // namespace
 
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit) {
-  if (Y.cols() == 1) return dense_complex_newton(H, Y, max_iterations, grad_tol);
+  if (Y.cols() == 1) return rank_one_newton(H, Y, max_iterations, grad_tol);
   return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit);
 }
 
