@@ -25,16 +25,13 @@ using Eigen::MatrixXcd;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// A = L Lᴴ for a Hermitian A (N × N), factored in place by Eigen's blocked kernel into the lower
-// triangle of L. Eigen::LLT::compute also sums |a_ij| over the matrix for a condition estimate
-// that nothing here reads; for complex entries that is a hypot per entry, 8 % of the interior
-// point's time at N = 100 (BENCHMARKS.md, session 13).
+// A = L Lᴴ for a Hermitian A (N × N), into the lower triangle of L (cholesky_in_place).
 struct ComplexCholesky {
   explicit ComplexCholesky(Eigen::Index N) : L(N, N) {}
   // False when A is not positive definite.
   bool compute(const MatrixXcd& A) {
     L = A;
-    return Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(L) == -1;
+    return cholesky_in_place(L);
   }
   Eigen::TriangularView<const MatrixXcd, Eigen::Lower> lower() const { return L.triangularView<Eigen::Lower>(); }
   MatrixXcd L;  // N × N: the factor in the lower triangle, the upper triangle unused

@@ -33,6 +33,17 @@ constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 // f(Z) = tr(Zᴴ H Z) with ZH = H Z.
 double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
 
+// The multipliers μ_i = Re (H Y)_i y_iᴴ into mu (N), from HY = H Y (N × p).
+void multipliers(const MatrixXcd& HY, const MatrixXcd& Y, VectorXd& mu) {
+  mu = (HY.array() * Y.array().conjugate()).real().rowwise().sum();
+}
+
+// The certificate matrix S = H − diag(μ) into S (N × N).
+void certificate_matrix(const MatrixXcd& H, const VectorXd& mu, MatrixXcd& S) {
+  S = H;
+  S.diagonal() -= mu.cast<std::complex<double>>();
+}
+
 // Every matrix of one rank-1 Newton run, allocated once. Y = z ∈ ℂᴺ (N × 1) with |z_i| = 1, and
 // row i's one tangent direction is b_i = i·z_i.
 struct RankOneWorkspace {
@@ -51,9 +62,8 @@ struct RankOneWorkspace {
 // μ, S, S z, the gradient and the Hessian at z (ws.HY = H z already).
 void rank_one_system(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& ws) {
   const Eigen::Index N = Y.rows();
-  ws.mu = (ws.HY.array() * Y.array().conjugate()).real().rowwise().sum();
-  ws.S = H;
-  ws.S.diagonal() -= ws.mu.cast<std::complex<double>>();
+  multipliers(ws.HY, Y, ws.mu);
+  certificate_matrix(H, ws.mu, ws.S);
   ws.SY = ws.HY - ws.mu.asDiagonal() * Y;
   for (Eigen::Index i = 0; i < N; ++i) ws.g[i] = 2.0 * (std::conj(kI * Y(i, 0)) * ws.SY(i, 0)).real();
   for (Eigen::Index j = 0; j < N; ++j) {
@@ -168,7 +178,7 @@ Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) 
   const Eigen::Index N = Y.rows();
   ws.L = ws.S;
   ws.L.diagonal().array() += lambda;
-  if (Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(ws.L) != -1) return Trial::shift_too_small;
+  if (!cholesky_in_place(ws.L)) return Trial::shift_too_small;
   invert_lower_factor(ws.L, ws.L_inv);
   ws.W.noalias() = ws.L_inv.adjoint() * ws.L_inv;
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
@@ -216,11 +226,10 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    ws.mu = (ws.HY.array() * Y.array().conjugate()).real().rowwise().sum();
+    multipliers(ws.HY, Y, ws.mu);
     const double grad_norm = 2.0 * (ws.HY - ws.mu.asDiagonal() * Y).norm();  // ‖2 S Y‖
     if (grad_norm < grad_tol) break;
-    ws.S = H;
-    ws.S.diagonal() -= ws.mu.cast<std::complex<double>>();
+    certificate_matrix(H, ws.mu, ws.S);
     ws.X.noalias() = Y * Y.adjoint();
     double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
     bool accepted = false;
@@ -283,8 +292,8 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
   out.Y = std::move(Y);
   out.iterations = iterations;
   out.mu = std::move(mu);
-  MatrixXcd S = H;  // H − diag(μ), N × N
-  S.diagonal() -= out.mu.cast<std::complex<double>>();
+  MatrixXcd S;  // H − diag(μ), N × N
+  certificate_matrix(H, out.mu, S);
   Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(S, want_vectors ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
   out.eigenvalues = eig.eigenvalues();
   if (want_vectors) out.eigenvectors = eig.eigenvectors();
@@ -292,7 +301,8 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
 }
 
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
-  Eigen::VectorXd mu = (H * Y).cwiseProduct(Y.conjugate()).real().rowwise().sum();
+  VectorXd mu;
+  multipliers(H * Y, Y, mu);
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
@@ -301,9 +311,10 @@ namespace {
 // True when S = H − diag(μ) + shift·I is positive definite (a Cholesky factorisation, N³/3
 // complex, against the eigendecomposition's ~4N³).
 bool shifted_positive_definite(const MatrixXcd& H, const VectorXd& mu, double shift) {
-  MatrixXcd S = H;  // H − diag(μ) + shift·I, N × N, factored in place
-  S.diagonal().array() += shift - mu.array();
-  return Eigen::internal::llt_inplace<std::complex<double>, Eigen::Lower>::blocked(S) == -1;
+  MatrixXcd S;  // H − diag(μ) + shift·I, N × N, factored in place
+  certificate_matrix(H, mu, S);
+  S.diagonal().array() += shift;
+  return cholesky_in_place(S);
 }
 
 }  // namespace
@@ -317,17 +328,17 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true);
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
-    if (!can_climb && !spectrum_if_not_psd) {
-      ComplexOutcome out;
-      out.mu = (H * Y).cwiseProduct(Y.conjugate()).real().rowwise().sum();
+    VectorXd mu;  // the multipliers at Y, N
+    multipliers(H * Y, Y, mu);
+    if (!can_climb && !spectrum_if_not_psd && !shifted_positive_definite(H, mu, 2.0 * options.psd_tol)) {
       // λ_min(S) < −2·psd_tol (up to rounding): not certified, and no spectrum is computed.
-      if (!shifted_positive_definite(H, out.mu, 2.0 * options.psd_tol)) {
-        out.Y = std::move(Y);
-        out.iterations = iterations;
-        return out;
-      }
+      ComplexOutcome out;
+      out.Y = std::move(Y);
+      out.mu = std::move(mu);
+      out.iterations = iterations;
+      return out;
     }
-    ComplexOutcome out = complex_outcome(H, std::move(Y), iterations, can_climb);
+    ComplexOutcome out = complex_outcome(H, std::move(Y), std::move(mu), iterations, can_climb);
     out.certified = out.eigenvalues[0] >= -options.psd_tol;
     if (out.certified || !can_climb) return out;
     // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,

@@ -65,6 +65,15 @@ double damped_newton_step(Eigen::MatrixXd& H, Eigen::LLT<Eigen::MatrixXd>& llt, 
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
+// triangle by Eigen's blocked kernel; false when A is not positive definite. Eigen::LLT::compute
+// would also sum |a_ij| for a condition estimate that nothing here reads: for complex entries a
+// hypot per entry, 8 % of the complex interior point's time at N = 100 (BENCHMARKS.md, session 13).
+template <class Matrix>
+bool cholesky_in_place(Matrix& A) {
+  return Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>::blocked(A) == -1;
+}
+
 // The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
 // n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
@@ -76,12 +85,9 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const auto full_decomposition = [&] { return Matrix(Eigen::SelfAdjointEigenSolver<Matrix>(M).eigenvectors().leftCols(k)); };
   if (n <= full_up_to) return full_decomposition();  // small: the full decomposition is as cheap
   const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
-  // M + δI = L Lᴴ in place by Eigen's blocked kernel (Eigen::LLT would also sum |m_ij| for a
-  // condition estimate: a hypot per complex entry, a third of this function at n = 100).
-  Matrix L = M;  // n × n, the factor in its lower triangle
+  Matrix L = M;  // n × n: M + δI, then its factor in the lower triangle (cholesky_in_place)
   L.diagonal().array() += shift;
-  using Scalar = typename Matrix::Scalar;
-  if (Eigen::internal::llt_inplace<Scalar, Eigen::Lower>::blocked(L) != -1) return full_decomposition();
+  if (!cholesky_in_place(L)) return full_decomposition();
   const auto lower = L.template triangularView<Eigen::Lower>();
   Matrix V(n, k + 2);  // deterministic start, n × (k + 2)
   for (Eigen::Index i = 0; i < n; ++i)
@@ -100,33 +106,11 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   return V * small.eigenvectors().leftCols(k);
 }
 
-// The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a[0 … k−1] and
-// subdiagonal b[0 … k−2], by bisection on Sturm counts (the negative pivots of T − xI = LDLᵀ)
-// inside the Gershgorin interval, to a width of 4ε·‖T‖: a few hundred flops for the Lanczos
-// matrices here (k ≤ 24), where Eigen's QR iteration with its allocations cost 6 % of a
-// tight_noisy N = 32 solve.
-inline double lowest_tridiagonal_eigenvalue(const double* a, const double* b, int k) {
-  double lo = a[0], hi = a[0], radius = 0;
-  for (int i = 0; i < k; ++i) {
-    const double r = (i > 0 ? std::abs(b[i - 1]) : 0.0) + (i + 1 < k ? std::abs(b[i]) : 0.0);
-    lo = std::min(lo, a[i] - r);
-    hi = std::max(hi, a[i] + r);
-    radius = std::max(radius, std::abs(a[i]) + r);
-  }
-  const double width = 4.0 * std::numeric_limits<double>::epsilon() * std::max(radius, 1e-300);
-  while (hi - lo > width) {  // λ_min ∈ [lo, hi]
-    const double x = 0.5 * (lo + hi);
-    bool below = false;  // is any eigenvalue < x? (a negative pivot of T − xI)
-    double q = 1.0;
-    for (int i = 0; i < k && !below; ++i) {
-      q = a[i] - x - (i > 0 ? b[i - 1] * b[i - 1] / q : 0.0);
-      if (q == 0) q = -1e-300;  // x is an eigenvalue of the leading block: count it as below
-      below = q < 0;
-    }
-    (below ? hi : lo) = x;
-  }
-  return lo;
-}
+// The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a (k) and
+// subdiagonal b (k − 1), to 4ε·‖T‖, by bisection on the Sturm counts the exact step lengths use
+// (step_length.cpp): a few hundred flops for the Lanczos matrices here (k ≤ 24), where Eigen's
+// QR iteration with its allocations cost 6 % of a tight_noisy N = 32 solve.
+double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b);
 
 // The lowest Ritz value of a self-adjoint operator (n × n, real or complex: Vector is VectorXd or
 // VectorXcd) after at most `steps` Lanczos steps with full reorthogonalisation, from a fixed start
@@ -153,7 +137,7 @@ double lanczos_lowest(Eigen::Index n, int steps, Apply apply) {
     if (beta[j] < 1e-12) break;
     v = w / beta[j];
   }
-  return lowest_tridiagonal_eigenvalue(alpha.data(), beta.data(), done);
+  return lowest_tridiagonal_eigenvalue(alpha.head(done), beta.head(done - 1));
 }
 
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,

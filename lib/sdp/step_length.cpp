@@ -83,7 +83,7 @@ void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::Vector
 
 // Number of eigenvalues below x of the symmetric tridiagonal (diagonal a, subdiagonal b):
 // the Sturm count, i.e. the negative pivots of the LDLᵀ factorisation of T − xI.
-int eigenvalues_below(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double x) {
+int eigenvalues_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b, double x) {
   int count = 0;
   double q = a[0] - x;
   if (q < 0) ++count;
@@ -96,7 +96,7 @@ int eigenvalues_below(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double
 }
 
 // Gershgorin bound on the spectral radius of the tridiagonal (a, b).
-double gershgorin_radius(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+double gershgorin_radius(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
   double radius = 0;
   const Eigen::Index n = a.size();
   for (Eigen::Index i = 0; i < n; ++i)
@@ -126,6 +126,22 @@ void times_block_diagonal_fixed(const Eigen::MatrixXd& P, const Eigen::MatrixXd&
 }
 
 }  // namespace
+
+double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
+  const Eigen::Index k = a.size();
+  double lo = a[0], hi = a[0];  // λ_min ∈ [lo, hi]: the ends of the Gershgorin discs
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double r = (i > 0 ? std::abs(b[i - 1]) : 0.0) + (i + 1 < k ? std::abs(b[i]) : 0.0);
+    lo = std::min(lo, a[i] - r);
+    hi = std::max(hi, a[i] + r);
+  }
+  const double width = 4.0 * std::numeric_limits<double>::epsilon() * std::max(gershgorin_radius(a, b), 1e-300);
+  while (hi - lo > width) {
+    const double x = 0.5 * (lo + hi);
+    (eigenvalues_below(a, b, x) > 0 ? hi : lo) = x;
+  }
+  return lo;
+}
 
 void symmetrize(Eigen::MatrixXd& A) {
   for (Eigen::Index j = 0; j < A.cols(); ++j)
