@@ -147,9 +147,9 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
 }
 
 // Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
-// (complex form only) for at most max_steps steps.
-Candidate complex_polish(const Eigen::MatrixXd& C, Eigen::MatrixXcd Y, int iterations, int max_steps) {
-  const Eigen::MatrixXcd H = detail::hermitian_of(C);
+// (complex form only, H = hermitian_of(C)) for at most max_steps steps.
+Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations,
+                         int max_steps) {
   iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
 }
@@ -163,12 +163,10 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
   if (ip.handed_off) {
-    Eigen::MatrixXcd Y = detail::complex_factor(ip.X, kComplexHandoffCutoff);
-    const int steps = detail::complex_newton(H, Y, kComplexHandoffSteps, 1e-12);
-    Candidate handed = candidate_of(C, detail::complex_outcome(H, std::move(Y), ip.iterations + steps, false),
-                                    Method::interior_point);
+    const Candidate handed =
+        complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), ip.iterations, kComplexHandoffSteps);
     if (is_certified(handed, o)) return handed;
-    ip.iterations += steps;
+    ip.iterations = handed.iterations;  // the Newton steps count
     ip = detail::solve_complex_interior_point(H, o, 0.0, &ip);
   }
   Candidate c = candidate_of(C, detail::complex_outcome(H, detail::complex_factor(ip.X, kComplexFactorCutoff), ip.y,
@@ -176,7 +174,7 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
                              Method::interior_point);
   c.note = ip.reason;
   if (is_certified(c, o)) return c;
-  Candidate polished = complex_polish(C, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
+  Candidate polished = complex_polish(C, H, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
   return is_certified(polished, o) ? polished : c;
 }
 
@@ -239,7 +237,8 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
   if (complex_form) {
-    polished = complex_polish(C, detail::complex_factor_of(ip.X), ip.iterations, kComplexPolishSteps);
+    polished =
+        complex_polish(C, detail::hermitian_of(C), detail::complex_factor_of(ip.X), ip.iterations, kComplexPolishSteps);
   } else {
     Candidate handed;  // only the factor: polish certifies its own result
     handed.Y = detail::factor_psd(ip.X, 0.0);
