@@ -127,4 +127,36 @@ TEST(SdpComplexInteriorPoint, HandsOffAndResumesToWhereOneRunEnds) {
   }
 }
 
+// The warm start from the staircase's rank-1 factor (the path solve() takes at N ≥ 27): strictly
+// feasible (unit diagonal, X ≻ 0, H − diag(y) ≻ 0), and the interior point from it ends at the
+// optimum of a cold run.
+TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
+  const int drones = 32;
+  const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
+  const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+  const Options o;
+  const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
+    return (H.array() * ip.X.array().conjugate()).real().sum();
+  };
+  Eigen::MatrixXcd Y = fact::sdp::detail::bottom_eigenvectors(H, 1, 64);  // N × 1
+  Y.rowwise().normalize();
+  fact::sdp::detail::complex_newton(H, Y, 15, 1e-12);
+
+  ComplexInteriorPointOutcome start;
+  ASSERT_TRUE(fact::sdp::detail::complex_interior_start(H, Y, 0.65, start));
+  EXPECT_EQ(start.iterations, 0);
+  EXPECT_LT((start.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(start.X).info(), Eigen::Success);
+  Eigen::MatrixXcd Z = H;
+  Z.diagonal() -= start.y.cast<std::complex<double>>();
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(Z).info(), Eigen::Success);
+
+  const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
+  const ComplexInteriorPointOutcome warm = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &start);
+  ASSERT_TRUE(cold.converged) << cold.reason;
+  ASSERT_TRUE(warm.converged) << warm.reason;
+  EXPECT_NEAR(objective(warm), objective(cold), 1e-9 * std::abs(objective(cold)));
+  EXPECT_NEAR(warm.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
+}
+
 }  // namespace

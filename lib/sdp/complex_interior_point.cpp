@@ -4,8 +4,8 @@
 // Λ_ii = y_i I₂, so this is the same relaxation in N×N complex arithmetic instead of 2N × 2N real
 // with 3N constraints: the Schur complement is N × N, against 3N × 3N.
 //
-// Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1) or a handed-off
-// iterate to resume from, HKM direction,
+// Feasible start (X = I, y = −2·1, Z = H + 2I ≻ 0 since ‖H‖_F = ‖C‖_F/√2 < 1), a warm start
+// from a low-rank factor (complex_interior_start) or a handed-off iterate to resume from, HKM direction,
 // Mehrotra predictor–corrector. With A(X)_i = Re X_ii and Aᵀ(y) = diag(y), ΔZ = −diag(Δy) is
 // diagonal, and the Schur complement of the HKM direction is M_ij = Re(X_ij conj(W_ij)) (N × N
 // real symmetric), W = Z⁻¹ (N × N Hermitian). Step lengths come from a Lanczos estimate of the boundary,
@@ -252,6 +252,24 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
   out.X = std::move(X);
   out.y = best_y;
   return out;
+}
+
+bool complex_interior_start(const Eigen::MatrixXcd& H, const Eigen::MatrixXcd& Y, double mix,
+                            ComplexInteriorPointOutcome& start) {
+  VectorXd mu;  // the multipliers at Y, N
+  complex_multipliers(H * Y, Y, mu);
+  for (double shift = 1e-3; shift <= 1.0; shift *= 10) {
+    const VectorXd y = mu.array() - shift;  // dual, N
+    MatrixXcd Z = H;  // H − diag(y) = S(Y) + shift·I, N × N, factored in place
+    set_slack_diagonal(H, y, Z);
+    if (!cholesky_in_place(Z)) continue;
+    start.X.noalias() = (1.0 - mix) * (Y * Y.adjoint());
+    start.X.diagonal().array() += mix;
+    start.y = y;
+    start.iterations = 0;
+    return true;
+  }
+  return false;
 }
 
 }  // namespace fact::sdp::detail

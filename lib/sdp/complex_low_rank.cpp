@@ -33,11 +33,6 @@ constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 // f(Z) = tr(Zᴴ H Z) with ZH = H Z.
 double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
 
-// The multipliers μ_i = Re (H Y)_i y_iᴴ into mu (N), from HY = H Y (N × p).
-void multipliers(const MatrixXcd& HY, const MatrixXcd& Y, VectorXd& mu) {
-  mu = (HY.array() * Y.array().conjugate()).real().rowwise().sum();
-}
-
 // The certificate matrix S = H − diag(μ) into S (N × N).
 void certificate_matrix(const MatrixXcd& H, const VectorXd& mu, MatrixXcd& S) {
   S = H;
@@ -62,7 +57,7 @@ struct RankOneWorkspace {
 // μ, S, S z, the gradient and the Hessian at z (ws.HY = H z already).
 void rank_one_system(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& ws) {
   const Eigen::Index N = Y.rows();
-  multipliers(ws.HY, Y, ws.mu);
+  complex_multipliers(ws.HY, Y, ws.mu);
   certificate_matrix(H, ws.mu, ws.S);
   ws.SY = ws.HY - ws.mu.asDiagonal() * Y;
   for (Eigen::Index i = 0; i < N; ++i) ws.g[i] = 2.0 * (std::conj(kI * Y(i, 0)) * ws.SY(i, 0)).real();
@@ -90,6 +85,10 @@ double rank_one_trial(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& 
 constexpr double kExtendDecrease = 1e-3;
 
 }  // namespace
+
+void complex_multipliers(const Eigen::MatrixXcd& HY, const Eigen::MatrixXcd& Y, Eigen::VectorXd& mu) {
+  mu = (HY.array() * Y.array().conjugate()).real().rowwise().sum();
+}
 
 std::string complex_embedding_mismatch(const Eigen::MatrixXd& C) {
   std::ostringstream why;
@@ -226,7 +225,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    multipliers(ws.HY, Y, ws.mu);
+    complex_multipliers(ws.HY, Y, ws.mu);
     const double grad_norm = 2.0 * (ws.HY - ws.mu.asDiagonal() * Y).norm();  // ‖2 S Y‖
     if (grad_norm < grad_tol) break;
     certificate_matrix(H, ws.mu, ws.S);
@@ -302,7 +301,7 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
 
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
   VectorXd mu;
-  multipliers(H * Y, Y, mu);
+  complex_multipliers(H * Y, Y, mu);
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
@@ -329,7 +328,7 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
     VectorXd mu;  // the multipliers at Y, N
-    multipliers(H * Y, Y, mu);
+    complex_multipliers(H * Y, Y, mu);
     if (!can_climb && !spectrum_if_not_psd && !shifted_positive_definite(H, mu, 2.0 * options.psd_tol)) {
       // λ_min(S) < −2·psd_tol (up to rounding): not certified, and no spectrum is computed.
       ComplexOutcome out;

@@ -36,6 +36,13 @@ Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y) {
   return out;
 }
 
+Eigen::MatrixXcd complex_of_real_factor(const Eigen::MatrixXd& Y_real) {
+  Eigen::MatrixXcd Y(Y_real.rows() / 2, Y_real.cols() / 2);  // y_ik = Y_real(2i, 2k) + i·Y_real(2i+1, 2k)
+  for (Eigen::Index k = 0; k < Y.cols(); ++k)
+    for (Eigen::Index i = 0; i < Y.rows(); ++i) Y(i, k) = {Y_real(2 * i, 2 * k), Y_real(2 * i + 1, 2 * k)};
+  return Y;
+}
+
 }  // namespace detail
 
 }  // namespace fact::sdp

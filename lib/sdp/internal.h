@@ -228,6 +228,12 @@ Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C);
 // The real embedding of any complex matrix, entry by entry (N × p → 2N × 2p; forms.cpp, where
 // real_embedding uses it for square H), so emb(Y) emb(Y)ᵀ = emb(Y Yᴴ).
 Eigen::MatrixXd real_factor(const Eigen::MatrixXcd& Y);
+// Its inverse: the N × p complex Y whose real_factor is Y_real (2N × 2p), read from the first
+// column of every 2×2 block.
+Eigen::MatrixXcd complex_of_real_factor(const Eigen::MatrixXd& Y_real);
+// The multipliers μ_i = Re (H Y)_i y_iᴴ (N) of a factor Y (N × p, unit rows), from HY = H Y (N × p):
+// S = H − diag(μ) is the certificate at Y (complex_low_rank.cpp).
+void complex_multipliers(const Eigen::MatrixXcd& HY, const Eigen::MatrixXcd& Y, Eigen::VectorXd& mu);
 // Damped Riemannian Newton on unit rows of Y (N × p complex) for tr(Yᴴ H Y), until
 // ‖grad‖ < grad_tol. Returns the steps taken. At p = 1 the Hessian is formed in tangent bases
 // (N × N real); at p ≥ 2 each step solves the Newton system in Schur form through (S + λI)⁻¹
@@ -274,10 +280,19 @@ struct ComplexInteriorPointOutcome {
 // Primal–dual path following on the Hermitian N × N problem min Re tr(H X), X_ii = 1, X ⪰ 0
 // (complex_interior_point.cpp), HKM direction and Mehrotra corrector, stopping once the
 // relative gap is below handoff_gap (> 0: handed_off is set). `resume` (an outcome that handed
-// off) continues from its X and y, which are strictly feasible, instead of X = I.
+// off, or a complex_interior_start) continues from its X and y, which are strictly feasible,
+// instead of X = I; its iterations are added to the outcome's.
 ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
                                                          double handoff_gap,
                                                          const ComplexInteriorPointOutcome* resume = nullptr);
+
+// A strictly feasible start for the complex interior point from a factor Y (N × p, unit rows) of
+// a point near the optimum (the staircase's last level, which did not certify):
+// X = (1 − mix)·Y Yᴴ + mix·I (unit diagonal, positive definite for mix > 0) and y = μ(Y) − s·1, with
+// s the first of 1e-3, 1e-2, … 1 for which H − diag(y) = S(Y) + sI passes a Cholesky test.
+// iterations is 0. False, and start untouched, when no s passes.
+bool complex_interior_start(const Eigen::MatrixXcd& H, const Eigen::MatrixXcd& Y, double mix,
+                            ComplexInteriorPointOutcome& start);
 
 // The certificate of the d = 2 problem on emb(H): Λ_ii = μ_i I₂, and S = emb(H − diag μ) has
 // every eigenvalue of H − diag μ twice. An outcome without eigenvalues gives λ_min and the

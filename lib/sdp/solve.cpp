@@ -52,6 +52,12 @@ constexpr int kComplexPolishSteps = 4;
 constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
+// The complex interior point starts from the staircase's last factor Y, X = (1 − mix) Y Yᴴ + mix·I
+// with mix = kComplexStartMix, instead of X = I: tight_noisy sweeps (8 seeds, interleaved in one
+// process) took 26–30 % less time at N = 32, 4–12 % at N = 64 and 100, 39 % at N = 64 with noise
+// 0.01; mix 0.5 was 1.5 % faster at N = 32 and 4–10 % slower at N = 64 and 100 (BENCHMARKS.md,
+// session 17).
+constexpr double kComplexStartMix = 0.65;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -154,14 +160,25 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
   return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
 }
 
-// The complex interior point on H (complex form, automatic mode), handed to complex Newton at
+// The complex interior point on H (complex form, automatic mode), started from the staircase's
+// factor staircase_Y (2N × 2p, real form; complex_interior_start with kComplexStartMix; X = I and
+// y = −2 when that finds no dual shift or the warm start stalls), handed to complex Newton at
 // kComplexHandoffGap and, when that does not certify, resumed and run to convergence. Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
 // rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
-Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o) {
+Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o, const Eigen::MatrixXd& staircase_Y) {
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
-  detail::ComplexInteriorPointOutcome ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
+  detail::ComplexInteriorPointOutcome start;
+  const bool warm = staircase_Y.size() > 0 &&
+                    detail::complex_interior_start(H, detail::complex_of_real_factor(staircase_Y), kComplexStartMix, start);
+  detail::ComplexInteriorPointOutcome ip =
+      detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
+  if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (seen once in 192 sweep
+    const int wasted = ip.iterations;              // instances, at a relative gap of 1.1): start cold
+    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
+    ip.iterations += wasted;
+  }
   if (ip.handed_off) {
     const Candidate handed =
         complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), ip.iterations, kComplexHandoffSteps);
@@ -344,7 +361,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     // Complex form: the N × N complex interior point first, the 2N × 2N real one when it does
     // not certify.
     Candidate ip;
-    if (complex_form) ip = from_complex_interior_point(Cs, options);
+    if (complex_form) ip = from_complex_interior_point(Cs, options, best.Y);
     if (!complex_form || !is_certified(ip, options)) ip = from_interior_point(Cs, d, options, complex_form);
     ip.iterations += best.iterations;
     if (options.method == Method::automatic && !is_certified(ip, options)) {
