@@ -41,10 +41,13 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
   Certificate cert;
   cert.lambda = lambda;
   const Eigen::MatrixXd S = certificate_matrix(C, lambda, d);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(
-      S, want_vector ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-  cert.eigenvalues = eig.eigenvalues();
-  if (want_vector) cert.min_vector = eig.eigenvectors().col(0);
+  if (want_vector) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
+    cert.eigenvalues = eig.eigenvalues();
+    cert.min_vector = eig.eigenvectors().col(0);
+  } else {
+    cert.eigenvalues = eigenvalues_of(S);
+  }
   for (Eigen::Index i = 0; i < C.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
   bound_from_spectrum(cert);
   return cert;

@@ -106,6 +106,22 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   return V * small.eigenvectors().leftCols(k);
 }
 
+// Householder reduction of the symmetric A (n × n, lower triangle used; destroyed) to the
+// tridiagonal matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1, entries
+// defined up to sign); scratch is 2n (spectrum.cpp).
+void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal, Eigen::VectorXd& scratch);
+
+// The eigenvalues of the symmetric tridiagonal matrix with diagonal d (n) and squared
+// off-diagonal entries e2 (e2[i] = T(i+1, i)², n entries, the last one scratch), ascending into d;
+// e2 is destroyed. Root-free QL (EISPACK's tqlrat); false when an eigenvalue took more than 30
+// sweeps (d is then undefined).
+bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2);
+
+// All eigenvalues of the self-adjoint A (n × n, real or complex), ascending: tridiagonalize and
+// tridiagonal_eigenvalues (Eigen's QR only if that fails).
+Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A);
+Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A);
+
 // The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a (k) and
 // subdiagonal b (k − 1), to 4ε·‖T‖, by bisection on the Sturm counts the exact step lengths use
 // (step_length.cpp): a few hundred flops for the Lanczos matrices here (k ≤ 24), where Eigen's

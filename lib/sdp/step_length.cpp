@@ -1,6 +1,7 @@
-// Step lengths of the interior point (see step_length.h). The kernels below work on raw
-// column-major storage: at the sizes the exact path serves (n ≤ 48) Eigen's blocked
-// triangular solves and tridiagonalisation spend most of their time on overhead.
+// Step lengths of the interior point (see step_length.h). The kernels below (and spectrum.cpp's
+// tridiagonalisation) work on raw column-major storage: at the sizes the exact path serves
+// (n ≤ 48) Eigen's blocked triangular solves and tridiagonalisation spend most of their time on
+// overhead.
 #include "step_length.h"
 
 #include "internal.h"
@@ -10,76 +11,6 @@
 
 namespace fact::sdp::detail {
 namespace {
-
-// w = τ A v for the symmetric m × m matrix A given by its lower triangle (column-major,
-// leading dimension lda). One pass over the lower triangle: column j adds A(j:m, j) v_j to
-// w(j:m) and A(j+1:m, j)ᵀ v(j+1:m) to w_j.
-void symmetric_times(const double* __restrict a, Eigen::Index lda, Eigen::Index m, const double* __restrict v,
-                     double tau, double* __restrict w) {
-  std::fill(w, w + m, 0.0);
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const double* col = a + j * lda;
-    const double vj = tau * v[j];
-    double dot = 0;
-    w[j] += col[j] * vj;
-    for (Eigen::Index i = j + 1; i < m; ++i) {
-      w[i] += col[i] * vj;
-      dot += col[i] * v[i];
-    }
-    w[j] += tau * dot;
-  }
-}
-
-// A −= v wᵀ + w vᵀ on the lower triangle of the m × m matrix A (column-major, leading dimension lda).
-void symmetric_rank2_update(double* __restrict a, Eigen::Index lda, Eigen::Index m, const double* __restrict v,
-                            const double* __restrict w) {
-  for (Eigen::Index j = 0; j < m; ++j) {
-    double* col = a + j * lda;
-    const double vj = v[j], wj = w[j];
-    for (Eigen::Index i = j; i < m; ++i) col[i] -= v[i] * wj + w[i] * vj;
-  }
-}
-
-// Householder reduction of the symmetric A (n × n, lower triangle used; destroyed) to the
-// tridiagonal matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1).
-// scratch is 2n. Step k reflects column k below the diagonal onto e₁ with H = I − τ v vᵀ and
-// updates the trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᵀ − w vᵀ with
-// w = τ A₂₂ v − (τ² vᵀA₂₂v / 2) v.
-void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
-                    Eigen::VectorXd& scratch) {
-  const Eigen::Index n = A.rows(), lda = A.outerStride();
-  double* v = scratch.data();      // Householder vector, m
-  double* w = scratch.data() + n;  // w above, m
-  for (Eigen::Index k = 0; k + 2 < n; ++k) {
-    const Eigen::Index m = n - k - 1;  // size of the trailing block
-    const double* x = &A(k + 1, k);    // the column below the diagonal
-    double tail = 0;
-    for (Eigen::Index i = 1; i < m; ++i) tail += x[i] * x[i];
-    diagonal[k] = A(k, k);
-    if (tail == 0) {  // already tridiagonal in this column
-      subdiagonal[k] = x[0];
-      continue;
-    }
-    const double norm = std::sqrt(x[0] * x[0] + tail);
-    const double alpha = x[0] > 0 ? -norm : norm;
-    subdiagonal[k] = alpha;
-    std::copy(x, x + m, v);
-    v[0] -= alpha;
-    const double tau = 2.0 / (v[0] * v[0] + tail);
-    double* a22 = &A(k + 1, k + 1);
-    symmetric_times(a22, lda, m, v, tau, w);
-    double vw = 0;
-    for (Eigen::Index i = 0; i < m; ++i) vw += v[i] * w[i];
-    const double half = 0.5 * tau * vw;
-    for (Eigen::Index i = 0; i < m; ++i) w[i] -= half * v[i];
-    symmetric_rank2_update(a22, lda, m, v, w);
-  }
-  if (n >= 2) {
-    diagonal[n - 2] = A(n - 2, n - 2);
-    subdiagonal[n - 2] = A(n - 1, n - 2);
-  }
-  diagonal[n - 1] = A(n - 1, n - 1);
-}
 
 // Number of eigenvalues below x of the symmetric tridiagonal (diagonal a, subdiagonal b):
 // the Sturm count, i.e. the negative pivots of the LDLᵀ factorisation of T − xI.
