@@ -2,11 +2,11 @@
 // certify, and classify. Each step is a named piece in internal.h.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
-#include <cmath>
 #include <optional>
-#include <sstream>
+#include <string>
 
 #include "internal.h"
 
@@ -56,10 +56,10 @@ constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
 // The complex interior point starts from the staircase's last factor Y, X = (1 − mix) Y Yᴴ + mix·I
-// with mix = kComplexStartMix, instead of X = I: tight_noisy sweeps (8 seeds, interleaved in one
-// process) took 26–30 % less time at N = 32, 4–12 % at N = 64 and 100, 39 % at N = 64 with noise
-// 0.01; mix 0.5 was 1.5 % faster at N = 32 and 4–10 % slower at N = 64 and 100 (BENCHMARKS.md,
-// session 17).
+// with mix = kComplexStartMix, instead of X = I. Tight sweeps (8 seeds, interleaved in one
+// process), mix 0.5 against X = I: −27 % time at N = 32, −2 % at 64, −6 % at 100 (noise 0.05),
+// −10 % and −39 % at N = 32 and 64 with noise 0.01; 0.65 against 0.5: +1.5 %, −4 %, −10 % at
+// N = 32, 64, 100 (BENCHMARKS.md, session 17).
 constexpr double kComplexStartMix = 0.65;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
@@ -177,8 +177,8 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
                     detail::complex_interior_start(H, detail::complex_of_real_factor(staircase_Y), kComplexStartMix, start);
   detail::ComplexInteriorPointOutcome ip =
       detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
-  if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (seen once in 192 sweep
-    const int wasted = ip.iterations;              // instances, at a relative gap of 1.1): start cold
+  if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (4 of 240 sweep instances,
+    const int wasted = ip.iterations;              // N = 27 … 100, near a relative gap of 1): start cold
     ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
     ip.iterations += wasted;
   }
