@@ -117,7 +117,7 @@ void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::Vector
 // sweeps (d is then undefined).
 bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2);
 
-// All eigenvalues of the self-adjoint A (n × n, real or complex), ascending: tridiagonalize and
+// All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending: tridiagonalize and
 // tridiagonal_eigenvalues (Eigen's QR only if that fails).
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A);
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A);
