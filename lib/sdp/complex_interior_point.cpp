@@ -259,13 +259,10 @@ bool complex_interior_start(const Eigen::MatrixXcd& H, const Eigen::MatrixXcd& Y
   VectorXd mu;  // the multipliers at Y, N
   complex_multipliers(H * Y, Y, mu);
   for (double shift = 1e-3; shift <= 1.0; shift *= 10) {
-    const VectorXd y = mu.array() - shift;  // dual, N
-    MatrixXcd Z = H;  // H − diag(y) = S(Y) + shift·I, N × N, factored in place
-    set_slack_diagonal(H, y, Z);
-    if (!cholesky_in_place(Z)) continue;
+    if (!shifted_positive_definite(H, mu, shift)) continue;  // H − diag(μ − shift) = S(Y) + shift·I
     start.X.noalias() = (1.0 - mix) * (Y * Y.adjoint());
     start.X.diagonal().array() += mix;
-    start.y = y;
+    start.y = mu.array() - shift;
     start.iterations = 0;
     return true;
   }

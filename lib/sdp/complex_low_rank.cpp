@@ -309,18 +309,12 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, in
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
-namespace {
-
-// True when S = H − diag(μ) + shift·I is positive definite (a Cholesky factorisation, N³/3
-// complex, against the eigendecomposition's ~4N³).
-bool shifted_positive_definite(const MatrixXcd& H, const VectorXd& mu, double shift) {
+bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd& mu, double shift) {
   MatrixXcd S;  // H − diag(μ) + shift·I, N × N, factored in place
   certificate_matrix(H, mu, S);
   S.diagonal().array() += shift;
   return cholesky_in_place(S);
 }
-
-}  // namespace
 
 ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns,
                                       bool spectrum_if_not_psd) {

@@ -1,10 +1,7 @@
 // The SDP solve: validate, scale, primal solve (low rank, then interior point if needed),
 // certify, and classify. Each step is a named piece in internal.h.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdarg>
-#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -308,19 +305,8 @@ Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Opt
   return is_certified(polished, o) ? polished : c;
 }
 
-// printf into a std::string. The reason is written on every solve, and an std::ostringstream's
-// construction (its locale) and insertions cost ~1 µs, 4 % of a tight_noisy N = 5 solve; %g
-// prints a double as the stream's default format does.
-[[gnu::format(printf, 1, 2)]] std::string printed(const char* format, ...) {
-  char buffer[512];
-  va_list args;
-  va_start(args, format);
-  const int length = std::vsnprintf(buffer, sizeof buffer, format, args);
-  va_end(args);
-  return std::string(buffer, static_cast<std::size_t>(std::clamp(length, 0, static_cast<int>(sizeof buffer) - 1)));
-}
-
 void classify(Result& r, const Candidate& c, const Options& o) {
+  using detail::printed;
   const Eigen::VectorXd& ev = c.cert.eigenvalues;
   r.nullity = nullity(c.cert, o);
   r.eig_gap = ev.size() > r.d ? ev[r.d] : 0.0;

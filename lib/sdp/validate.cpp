@@ -1,46 +1,48 @@
+#include <algorithm>
 #include <cmath>
-#include <iomanip>
-#include <sstream>
+#include <cstdarg>
+#include <cstdio>
 
 #include "internal.h"
 
 namespace fact::sdp {
 
-namespace {
+namespace detail {
 
-// The arguments streamed into one string: built only for a message, because an
-// std::ostringstream's construction alone (its locale) costs ~0.3 µs on every solve.
-template <class... Parts>
-std::string message(const Parts&... parts) {
-  std::ostringstream why;
-  (why << ... << parts);
-  return why.str();
+std::string printed(const char* format, ...) {
+  char buffer[512];
+  va_list args;
+  va_start(args, format);
+  const int length = std::vsnprintf(buffer, sizeof buffer, format, args);
+  va_end(args);
+  return std::string(buffer, static_cast<std::size_t>(std::clamp(length, 0, static_cast<int>(sizeof buffer) - 1)));
 }
 
-}  // namespace
+}  // namespace detail
+
+using detail::printed;
 
 std::string validate(const Eigen::MatrixXd& C, int d) {
   if (d != 1 && d != 2) {
-    return message("d = ", d, ": block size must be 1 or 2");
+    return printed("d = %d: block size must be 1 or 2", d);
   }
   if (C.rows() != C.cols()) {
-    return message("C is ", C.rows(), "×", C.cols(), ": must be square");
+    return printed("C is %td×%td: must be square", C.rows(), C.cols());
   }
   if (C.rows() % d != 0) {
-    return message("C is ", C.rows(), "×", C.cols(), ": size not divisible by d = ", d);
+    return printed("C is %td×%td: size not divisible by d = %d", C.rows(), C.cols(), d);
   }
   if (C.rows() / d < 2) {
-    return message("N = ", C.rows() / d, " blocks: need at least 2 (one drone has nothing to relate to)");
+    return printed("N = %td blocks: need at least 2 (one drone has nothing to relate to)", C.rows() / d);
   }
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = 0; i < C.rows(); ++i)
-      if (!std::isfinite(C(i, j))) return message("C(", i, ",", j, ") = ", C(i, j), ": not finite");
+      if (!std::isfinite(C(i, j))) return printed("C(%td,%td) = %g: not finite", i, j, C(i, j));
   const double tol = 1e-9 * std::max(1.0, C.cwiseAbs().maxCoeff());
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = j + 1; i < C.rows(); ++i)
       if (std::abs(C(i, j) - C(j, i)) > tol)
-        return message(std::setprecision(17), "C not symmetric: C(", i, ",", j, ") = ", C(i, j), " but C(", j, ",", i,
-                       ") = ", C(j, i));
+        return printed("C not symmetric: C(%td,%td) = %.17g but C(%td,%td) = %.17g", i, j, C(i, j), j, i, C(j, i));
   return {};
 }
 
