@@ -1,7 +1,8 @@
 // The certificates' eigenvalues (lib/sdp/spectrum.cpp: Householder tridiagonalisation and the
 // root-free QL iteration) against Eigen's SelfAdjointEigenSolver, on matrices shaped like the
 // solver's S: random, positive semidefinite with a large null space (a non-unique optimum's S),
-// clustered, and tridiagonal matrices that split into blocks.
+// clustered, and tridiagonal matrices that split into blocks; and the lowest eigenvectors
+// (inverse iteration on the tridiagonal matrix) by their residuals and orthonormality.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -11,6 +12,7 @@
 namespace {
 
 using fact::sdp::detail::eigenvalues_of;
+using fact::sdp::detail::lowest_eigenpairs;
 
 // Largest eigenvalue difference relative to the spectral radius.
 double relative_difference(const Eigen::VectorXd& ours, const Eigen::VectorXd& reference) {
@@ -66,6 +68,71 @@ TEST(SdpSpectrum, TridiagonalThatSplitsAndHasZeros) {
   Eigen::VectorXd expected(5);
   expected << 0, 0, 1, 3, 5;
   EXPECT_LT((d - expected).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+// ‖A V − V diag(λ)‖ / ‖A‖ over the k columns of V, and ‖Vᴴ V − I‖.
+template <class Matrix>
+void expect_lowest_eigenpairs(const Matrix& A, int k) {
+  Eigen::VectorXd eigenvalues;
+  Matrix V;
+  lowest_eigenpairs(A, k, eigenvalues, V);
+  const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Matrix>(A, Eigen::EigenvaluesOnly).eigenvalues();
+  ASSERT_EQ(eigenvalues.size(), A.rows());
+  ASSERT_EQ(V.rows(), A.rows());
+  ASSERT_EQ(V.cols(), k);
+  EXPECT_LT(relative_difference(eigenvalues, reference), 1e-13);
+  const double scale = std::max(reference.cwiseAbs().maxCoeff(), 1e-300);
+  for (int j = 0; j < k; ++j) {
+    SCOPED_TRACE("vector " + std::to_string(j));
+    EXPECT_LT((A * V.col(j) - eigenvalues[j] * V.col(j)).norm() / scale, 1e-12);
+  }
+  EXPECT_LT((V.adjoint() * V - Matrix::Identity(k, k)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(SdpSpectrum, LowestRealEigenvectorsHaveSmallResiduals) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n = 1; n <= 40; ++n) {
+    for (int kind = 0; kind < 3; ++kind) {
+      SCOPED_TRACE("n = " + std::to_string(n) + ", kind " + std::to_string(kind));
+      Eigen::MatrixXd B(n, kind == 1 ? std::max(1, n / 3) : n);  // kind 1: PSD of rank n/3, a null space
+      for (Eigen::Index j = 0; j < B.cols(); ++j)
+        for (Eigen::Index i = 0; i < n; ++i) B(i, j) = gauss(rng);
+      Eigen::MatrixXd A = kind == 0 ? Eigen::MatrixXd(B + B.transpose()) : Eigen::MatrixXd(B * B.transpose());
+      if (kind == 2) A -= 1e3 * Eigen::MatrixXd::Identity(n, n);  // clustered around −1000
+      expect_lowest_eigenpairs(A, std::min(n, 3));
+    }
+  }
+}
+
+TEST(SdpSpectrum, LowestHermitianEigenvectorsHaveSmallResiduals) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n = 1; n <= 40; ++n) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    Eigen::MatrixXcd B(n, std::max(1, n / 4));  // rank n/4: a repeated lowest eigenvalue −0.5
+    for (Eigen::Index j = 0; j < B.cols(); ++j)
+      for (Eigen::Index i = 0; i < n; ++i) B(i, j) = {gauss(rng), gauss(rng)};
+    const Eigen::MatrixXcd A = B * B.adjoint() - 0.5 * Eigen::MatrixXcd::Identity(n, n);
+    expect_lowest_eigenpairs(A, std::min(n, 2));
+  }
+}
+
+TEST(SdpSpectrum, LowestEigenvectorsOfMatricesThatAreAlreadyReduced) {
+  // Diagonal (every reflection skipped; the eigenvalue 1 is repeated) and a tridiagonal matrix
+  // with a zero off-diagonal entry (the reduced matrix splits into two blocks).
+  Eigen::MatrixXd D = Eigen::VectorXd::LinSpaced(6, 1.0, 6.0).asDiagonal();
+  D(1, 1) = 1.0;
+  expect_lowest_eigenpairs(D, 3);
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(6, 6);
+  T.diagonal() << 4, 1, 3, 0.5, 2, 7;
+  T(1, 0) = T(0, 1) = 0.7;
+  T(3, 2) = T(2, 3) = -0.4;
+  T(5, 4) = T(4, 5) = 1.1;  // T(2, 1) = T(4, 3) = 0: three 2 × 2 blocks
+  expect_lowest_eigenpairs(T, 3);
+  Eigen::MatrixXcd Z(2, 2);  // n = 2: no reflector at all, a complex off-diagonal entry
+  Z << 1.0, std::complex<double>(0.3, -0.4), std::complex<double>(0.3, 0.4), -2.0;
+  expect_lowest_eigenpairs(Z, 2);
 }
 
 }  // namespace

@@ -42,9 +42,9 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
   cert.lambda = lambda;
   const Eigen::MatrixXd S = certificate_matrix(C, lambda, d);
   if (want_vector) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
-    cert.eigenvalues = eig.eigenvalues();
-    cert.min_vector = eig.eigenvectors().col(0);
+    Eigen::MatrixXd vector;  // n × 1
+    lowest_eigenpairs(S, 1, cert.eigenvalues, vector);
+    cert.min_vector = vector.col(0);
   } else {
     cert.eigenvalues = eigenvalues_of(S);
   }

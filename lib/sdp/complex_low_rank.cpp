@@ -13,6 +13,7 @@
 // Row i's tangent space is {w ∈ ℂ^p : Re w y_iᴴ = 0} (real dimension 2p − 1). At rank 1 it is
 // spanned by i·y_i and the Newton system is N × N real (rank_one_newton); above rank 1 the system
 // is solved in Schur form through (S + λI)⁻¹ (schur_complex_newton), O(N³) whatever p is.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -294,9 +295,8 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
   MatrixXcd S;  // H − diag(μ), N × N
   certificate_matrix(H, out.mu, S);
   if (want_vectors) {
-    const Eigen::SelfAdjointEigenSolver<MatrixXcd> eig(S);
-    out.eigenvalues = eig.eigenvalues();
-    out.eigenvectors = eig.eigenvectors();
+    lowest_eigenpairs(S, static_cast<int>(std::min<Eigen::Index>(kMaxNewColumns, S.rows())), out.eigenvalues,
+                      out.eigenvectors);
   } else {
     out.eigenvalues = eigenvalues_of(S);
   }

@@ -80,6 +80,14 @@ bool cholesky_in_place(Matrix& A) {
   return Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>::blocked(A) == -1;
 }
 
+// All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
+// eigenvectors of the k ≤ n smallest (n × k, orthonormal): tridiagonalize with the reflectors kept,
+// tridiagonal_eigenvalues, then inverse iteration on the tridiagonal matrix at each of the k
+// eigenvalues and the reflectors applied back (O(n²) a vector); Eigen's full decomposition only if
+// the QL iteration fails.
+void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors);
+void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors);
+
 // The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
 // n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
@@ -88,7 +96,12 @@ bool cholesky_in_place(Matrix& A) {
 template <class Matrix>
 Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const Eigen::Index n = M.rows();
-  const auto full_decomposition = [&] { return Matrix(Eigen::SelfAdjointEigenSolver<Matrix>(M).eigenvectors().leftCols(k)); };
+  const auto full_decomposition = [&] {
+    Eigen::VectorXd eigenvalues;  // n, not used
+    Matrix vectors;               // n × k
+    lowest_eigenpairs(M, k, eigenvalues, vectors);
+    return vectors;
+  };
   if (n <= full_up_to) return full_decomposition();  // small: the full decomposition is as cheap
   const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
   Matrix L = M;  // n × n: M + δI, then its factor in the lower triangle (cholesky_in_place)
@@ -271,7 +284,7 @@ struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
   Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
   Eigen::VectorXd eigenvalues;  // of S = H − diag(μ), ascending, N (empty: not computed)
-  Eigen::MatrixXcd eigenvectors;  // of S, N × N, only when asked for
+  Eigen::MatrixXcd eigenvectors;  // of S's lowest eigenvalues, N × min(N, 2), only when asked for
   int iterations = 0;           // Newton steps, all levels
   bool certified = false;       // λ_min(S) ≥ −psd_tol
 };

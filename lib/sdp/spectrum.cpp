@@ -1,12 +1,15 @@
-// Eigenvalues without eigenvectors, for the certificates (S = C − Λ, real n × n, or
-// S = H − diag μ, complex N × N) and the exact step lengths (step_length.cpp): Householder
-// reduction to a real symmetric tridiagonal matrix, then the root-free QL iteration of Pal, Walker
-// and Kahan (EISPACK's tqlrat) on the squares of its off-diagonal. Eigen's SelfAdjointEigenSolver
-// spent 1–3 µs of an 8-drone solve's 14 µs in its tridiagonal QR, whose Givens rotations take a
-// square root each (BENCHMARKS.md, session 17).
+// Eigenvalues, for the certificates (S = C − Λ, real n × n, or S = H − diag μ, complex N × N) and
+// the exact step lengths (step_length.cpp): Householder reduction to a real symmetric tridiagonal
+// matrix, then the root-free QL iteration of Pal, Walker and Kahan (EISPACK's tqlrat) on the
+// squares of its off-diagonal. Eigen's SelfAdjointEigenSolver spent 1–3 µs of an 8-drone solve's
+// 14 µs in its tridiagonal QR, whose Givens rotations take a square root each (BENCHMARKS.md,
+// session 17). The few eigenvectors the staircases need (their spectral start and their escapes
+// from saddles) come from inverse iteration on the tridiagonal matrix at those eigenvalues, carried
+// back through the stored reflectors, instead of a full decomposition with vectors.
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <vector>
 
 #include "internal.h"
 
@@ -16,26 +19,41 @@ namespace {
 double conj_of(double x) { return x; }
 std::complex<double> conj_of(const std::complex<double>& x) { return std::conj(x); }
 
+// The reflectors of a reduction, for eigenvectors: step k's H_k = I − τ_k v vᴴ acts on entries
+// k + 1 … n − 1 with v stored in column k of the reduced A below the diagonal, and the reduced
+// matrix's subdiagonal entry (k + 1, k) is beta_k (complex for complex A; the tridiagonal matrix
+// with |beta_k| is the same one up to a diagonal unitary similarity).
+template <class Scalar>
+struct Reflectors {
+  std::vector<Scalar> tau;   // n − 2 (0: no reflection at that step)
+  std::vector<Scalar> beta;  // n − 1
+};
+
 // Householder reduction of the self-adjoint A (n × n, lower triangle used; destroyed) to the real
 // symmetric tridiagonal matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1;
 // only its entries' magnitudes are defined). scratch is 2n. Step k reflects the column below the
 // diagonal, x (m = n − k − 1 entries), onto −phase(x₀)‖x‖e₁ with H = I − τ v vᴴ,
 // v = x + phase(x₀)‖x‖e₁, and updates the trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᴴ − w vᴴ
-// with w = τ A₂₂ v − (τ² vᴴA₂₂v / 2) v.
+// with w = τ A₂₂ v − (τ² vᴴA₂₂v / 2) v. With `kept`, v overwrites x and τ, beta are recorded.
 template <class Matrix, class Vector>
-void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal, Vector& scratch) {
+void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal, Vector& scratch,
+                         Reflectors<typename Matrix::Scalar>* kept = nullptr) {
   using Scalar = typename Matrix::Scalar;
   const Eigen::Index n = A.rows(), lda = A.outerStride();
   Scalar* v = scratch.data();      // Householder vector, m
   Scalar* w = scratch.data() + n;  // w above, m
   for (Eigen::Index k = 0; k + 2 < n; ++k) {
     const Eigen::Index m = n - k - 1;  // size of the trailing block
-    const Scalar* x = &A(k + 1, k);    // the column below the diagonal
+    Scalar* x = &A(k + 1, k);          // the column below the diagonal
     double tail = 0;
     for (Eigen::Index i = 1; i < m; ++i) tail += std::norm(x[i]);
     diagonal[k] = std::real(A(k, k));
     if (tail == 0) {  // already tridiagonal in this column
       subdiagonal[k] = std::abs(x[0]);
+      if (kept) {
+        kept->tau[k] = 0;
+        kept->beta[k] = x[0];
+      }
       continue;
     }
     const double norm = std::sqrt(std::norm(x[0]) + tail), size0 = std::abs(x[0]);
@@ -44,6 +62,11 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
     std::copy(x, x + m, v);
     v[0] += phase * norm;
     const double tau = 2.0 / (std::norm(v[0]) + tail);
+    if (kept) {
+      kept->tau[k] = tau;
+      kept->beta[k] = -phase * norm;  // H x = −phase(x₀)‖x‖e₁
+      std::copy(v, v + m, x);
+    }
     Scalar* a22 = &A(k + 1, k + 1);
     for (Eigen::Index i = 0; i < m; ++i) w[i] = 0;
     for (Eigen::Index j = 0; j < m; ++j) {  // w = τ A₂₂ v, one pass over the lower triangle
@@ -70,8 +93,50 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
   if (n >= 2) {
     diagonal[n - 2] = std::real(A(n - 2, n - 2));
     subdiagonal[n - 2] = std::abs(A(n - 1, n - 2));
+    if (kept) kept->beta[n - 2] = A(n - 1, n - 2);
   }
   diagonal[n - 1] = std::real(A(n - 1, n - 1));
+}
+
+// Solves (T − σI) x = b in place (b becomes x) for the real symmetric tridiagonal T with diagonal
+// a (n) and off-diagonal e (n − 1), by Gaussian elimination with partial pivoting (row i and
+// i + 1 swapped when the subdiagonal entry is larger); a pivot of 0 (σ an eigenvalue to the last
+// bit) is replaced by `tiny`, which only scales x. Work vectors u0, u1, u2 (n): U's diagonal
+// and its two superdiagonals.
+void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny,
+                               Eigen::VectorXd& b, Eigen::VectorXd& u0, Eigen::VectorXd& u1, Eigen::VectorXd& u2) {
+  const Eigen::Index n = a.size();
+  for (Eigen::Index i = 0; i < n; ++i) u0[i] = a[i] - sigma;
+  for (Eigen::Index i = 0; i + 1 < n; ++i) u1[i] = e[i];
+  double below = n > 1 ? e[0] : 0.0;  // the entry of row i + 1 in column i, still to eliminate
+  for (Eigen::Index i = 0; i + 1 < n; ++i) {
+    const double next_super = i + 2 < n ? e[i + 1] : 0.0;  // row i + 1's entry in column i + 2
+    if (std::abs(u0[i]) >= std::abs(below)) {
+      if (u0[i] == 0) u0[i] = tiny;
+      const double factor = below / u0[i];
+      u0[i + 1] -= factor * u1[i];
+      b[i + 1] -= factor * b[i];
+      u2[i] = 0;
+    } else {  // swap rows i and i + 1
+      const double factor = u0[i] / below;
+      u0[i] = below;
+      const double diagonal_next = u0[i + 1];
+      u0[i + 1] = u1[i] - factor * diagonal_next;
+      u1[i] = diagonal_next;
+      u2[i] = next_super;
+      if (i + 2 < n) u1[i + 1] = -factor * next_super;
+      std::swap(b[i], b[i + 1]);
+      b[i + 1] -= factor * b[i];
+    }
+    below = i + 2 < n ? e[i + 1] : 0.0;
+  }
+  if (u0[n - 1] == 0) u0[n - 1] = tiny;
+  for (Eigen::Index i = n - 1; i >= 0; --i) {
+    double value = b[i];
+    if (i + 1 < n) value -= u1[i] * b[i + 1];
+    if (i + 2 < n) value -= u2[i] * b[i + 2];
+    b[i] = value / u0[i];
+  }
 }
 
 template <class Matrix>
@@ -147,5 +212,86 @@ bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2) {
 
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A) { return eigenvalues_impl(A); }
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A) { return eigenvalues_impl(A); }
+
+namespace {
+
+// Inverse iterations per eigenvector. From the QL eigenvalue (accurate to ε‖T‖) one iteration
+// already gives the vector to rounding unless the start is nearly orthogonal to it; the others
+// are O(n) each.
+constexpr int kInverseIterations = 3;
+
+// Unit eigenvector of T (diagonal a, off-diagonal e) for the eigenvalue sigma, orthogonal to the
+// columns 0 … j − 1 of found (n × k, the vectors of lower eigenvalues), into found.col(j).
+void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny, int j,
+                             Eigen::MatrixXd& found) {
+  const Eigen::Index n = a.size();
+  Eigen::VectorXd u(n), u0(n), u1(n), u2(n);  // iterate and the elimination's work vectors
+  for (Eigen::Index i = 0; i < n; ++i) u[i] = 1.0 + 0.5 * std::sin(1.3 * i + 0.7 * j);  // fixed, generic start
+  for (int step = 0; step < kInverseIterations; ++step) {
+    u.normalize();
+    solve_shifted_tridiagonal(a, e, sigma, tiny, u, u0, u1, u2);
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < j; ++i) u -= found.col(i).dot(u) * found.col(i);
+  }
+  found.col(j) = u.normalized();
+}
+
+template <class Matrix>
+void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors) {
+  using Scalar = typename Matrix::Scalar;
+  const Eigen::Index n = original.rows();
+  Matrix A = original;  // n × n: reduced in place, the reflectors' v below its diagonal
+  Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // of T, one spare entry for tqlrat
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> scratch(2 * n);
+  Reflectors<Scalar> kept{std::vector<Scalar>(std::max<Eigen::Index>(n - 2, 0)),
+                          std::vector<Scalar>(std::max<Eigen::Index>(n - 1, 0))};
+  tridiagonalize_impl(A, diagonal, subdiagonal, scratch, &kept);
+  eigenvalues = diagonal;
+  Eigen::VectorXd squares = subdiagonal.cwiseAbs2();
+  if (!tridiagonal_eigenvalues(eigenvalues, squares)) {  // as in eigenvalues_impl: Eigen's QR
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
+    eigenvalues = eig.eigenvalues();
+    vectors = eig.eigenvectors().leftCols(k);
+    return;
+  }
+  const Eigen::VectorXd off = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0));  // |beta|, n − 1
+  const double norm = std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  const double eps = std::numeric_limits<double>::epsilon();
+  Eigen::MatrixXd found(n, k);  // eigenvectors of T, n × k
+  double sigma = 0;
+  for (int j = 0; j < k; ++j) {
+    // A shift equal to the previous one (a repeated eigenvalue) is moved up by 10ε‖T‖: the
+    // orthogonalisation then picks the next vector of the eigenspace.
+    sigma = j > 0 ? std::max(eigenvalues[j], sigma + 10 * eps * norm) : eigenvalues[j];
+    tridiagonal_eigenvector(diagonal, off, sigma, eps * norm, j, found);
+  }
+  // Back to A: x = Q D u, D = diag(d) unitary with d₀ = 1, d_{i+1} = d_i beta_i / |beta_i| (so that
+  // D T Dᴴ is the reduced matrix), Q = H₀ H₁ ⋯ H_{n−3}.
+  vectors.resize(n, k);
+  Scalar phase = 1.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    vectors.row(i) = phase * found.row(i);
+    if (i + 1 < n && off[i] > 0) phase *= kept.beta[i] / off[i];
+  }
+  for (Eigen::Index step = n - 3; step >= 0; --step) {
+    const Scalar tau = kept.tau[step];
+    if (tau == Scalar(0)) continue;
+    const Eigen::Index m = n - step - 1;
+    const auto v = A.col(step).tail(m);  // the reflector's v
+    for (int j = 0; j < k; ++j) {
+      auto x = vectors.col(j).tail(m);
+      x -= (tau * v.dot(x)) * v;  // H x = x − τ v (vᴴ x)
+    }
+  }
+}
+
+}  // namespace
+
+void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors) {
+  lowest_eigenpairs_impl(A, k, eigenvalues, vectors);
+}
+void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors) {
+  lowest_eigenpairs_impl(A, k, eigenvalues, vectors);
+}
 
 }  // namespace fact::sdp::detail
