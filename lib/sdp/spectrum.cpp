@@ -177,7 +177,9 @@ bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2) {
       // Shift by the eigenvalue of the leading 2 × 2 block nearer to d[l].
       double s = std::sqrt(e2[l]), g = d[l];
       double p = (d[l + 1] - g) / (2.0 * s);
-      double r = std::hypot(p, 1.0);
+      // √(p² + 1) without libm's hypot (20–40 ns a call, a sixth of tqlrat at n = 5); p² cannot
+      // overflow below 1e150, and above it √(p² + 1) = |p| in double.
+      double r = std::abs(p) < 1e150 ? std::sqrt(p * p + 1.0) : std::abs(p);
       d[l] = s / (p + std::copysign(r, p));
       h = g - d[l];
       for (Eigen::Index i = l + 1; i < n; ++i) d[i] -= h;
