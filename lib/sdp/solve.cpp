@@ -320,7 +320,9 @@ void classify(Result& r, const Candidate& c, const Options& o) {
     r.reason = printed("relative duality gap %g > %g", r.rel_gap, o.gap_tol) + note;
     r.status = Status::not_certified;
   } else if (r.nullity != r.d) {
-    r.reason = printed("optimal, but S has nullity %d > d = %d (λ_%d(S) = %g < %g): the optimum is not unique; X has rank %d",
+    // Nullity above d does not prove other optima exist (a different Λ may have nullity d; the
+    // noise-free plain form has such instances): the reason says no more than the certificate.
+    r.reason = printed("optimal, but S has nullity %d > d = %d (λ_%d(S) = %g < %g): other optima may exist; X has rank %d",
                        r.nullity, r.d, r.d + 1, r.eig_gap, o.null_tol, r.rank);
     r.status = Status::certified_not_unique;
   } else {
