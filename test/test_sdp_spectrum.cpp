@@ -70,21 +70,25 @@ TEST(SdpSpectrum, TridiagonalThatSplitsAndHasZeros) {
   EXPECT_LT((d - expected).cwiseAbs().maxCoeff(), 1e-14);
 }
 
-// ‖A V − V diag(λ)‖ / ‖A‖ over the k columns of V, and ‖Vᴴ V − I‖.
+// ‖A V − V diag(λ)‖ / ‖A‖ over the k columns of V, and ‖Vᴴ V − I‖; the reference eigenvalues and
+// the residuals are taken on A / max|A_ij| (A at any scale; the zero matrix as it is).
 template <class Matrix>
 void expect_lowest_eigenpairs(const Matrix& A, int k) {
   Eigen::VectorXd eigenvalues;
   Matrix V;
   lowest_eigenpairs(A, k, eigenvalues, V);
-  const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Matrix>(A, Eigen::EigenvaluesOnly).eigenvalues();
+  const double unit = A.cwiseAbs().maxCoeff() > 0 ? A.cwiseAbs().maxCoeff() : 1.0;
+  const Matrix An = A / unit;  // entries of magnitude ≤ 1
+  const Eigen::VectorXd values = eigenvalues / unit;
+  const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Matrix>(An, Eigen::EigenvaluesOnly).eigenvalues();
   ASSERT_EQ(eigenvalues.size(), A.rows());
   ASSERT_EQ(V.rows(), A.rows());
   ASSERT_EQ(V.cols(), k);
-  EXPECT_LT(relative_difference(eigenvalues, reference), 1e-13);
+  EXPECT_LT(relative_difference(values, reference), 1e-13);
   const double scale = std::max(reference.cwiseAbs().maxCoeff(), 1e-300);
   for (int j = 0; j < k; ++j) {
     SCOPED_TRACE("vector " + std::to_string(j));
-    EXPECT_LT((A * V.col(j) - eigenvalues[j] * V.col(j)).norm() / scale, 1e-12);
+    EXPECT_LT((An * V.col(j) - values[j] * V.col(j)).norm() / scale, 1e-12);
   }
   EXPECT_LT((V.adjoint() * V - Matrix::Identity(k, k)).cwiseAbs().maxCoeff(), 1e-12);
 }
@@ -133,6 +137,27 @@ TEST(SdpSpectrum, LowestEigenvectorsOfMatricesThatAreAlreadyReduced) {
   Eigen::MatrixXcd Z(2, 2);  // n = 2: no reflector at all, a complex off-diagonal entry
   Z << 1.0, std::complex<double>(0.3, -0.4), std::complex<double>(0.3, 0.4), -2.0;
   expect_lowest_eigenpairs(Z, 2);
+}
+
+TEST(SdpSpectrum, LowestEigenvectorsAtAnyScale) {
+  // The zero matrix (every vector an eigenvector: finite, orthonormal ones), and one random matrix
+  // scaled by 1e-300 and 1e300 (the squared off-diagonal of the QL iteration and the inverse
+  // iteration's pivots and growth stay in range).
+  expect_lowest_eigenpairs(Eigen::MatrixXd(Eigen::MatrixXd::Zero(6, 6)), 2);
+  expect_lowest_eigenpairs(Eigen::MatrixXcd(Eigen::MatrixXcd::Zero(5, 5)), 2);
+  expect_lowest_eigenpairs(Eigen::MatrixXd(Eigen::MatrixXd::Zero(1, 1)), 1);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::MatrixXd B(8, 8);
+  for (Eigen::Index j = 0; j < 8; ++j)
+    for (Eigen::Index i = 0; i < 8; ++i) B(i, j) = gauss(rng);
+  const Eigen::MatrixXd A = B + B.transpose();
+  for (double scale : {1e-300, 1e300}) {
+    SCOPED_TRACE("scale " + std::to_string(scale));
+    expect_lowest_eigenpairs(Eigen::MatrixXd(scale * A), 2);
+    const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues();
+    EXPECT_LT(relative_difference(eigenvalues_of(Eigen::MatrixXd(scale * A)) / scale, reference), 1e-13);
+  }
 }
 
 }  // namespace

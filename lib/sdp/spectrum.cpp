@@ -139,15 +139,35 @@ void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& 
   }
 }
 
+// A = original, divided by its largest |entry| when that is outside [1e-100, 1e100] (the root-free
+// QL squares the off-diagonal, which would underflow or overflow; the solver's scaled S is never
+// there, and it is copied unchanged); returns the factor the eigenvalues of A are to be multiplied by.
+template <class Matrix>
+double copy_in_range(const Matrix& original, Matrix& A) {
+  const double largest2 = original.cwiseAbs2().maxCoeff();  // no square roots on the usual path
+  if (largest2 >= 1e-200 && largest2 <= 1e200) {
+    A = original;
+    return 1.0;
+  }
+  const double largest = original.cwiseAbs().maxCoeff();
+  if (largest == 0 || !std::isfinite(largest)) {
+    A = original;
+    return 1.0;
+  }
+  A = original / largest;
+  return largest;
+}
+
 template <class Matrix>
 Eigen::VectorXd eigenvalues_impl(const Matrix& original) {
   const Eigen::Index n = original.rows();
-  Matrix A = original;  // n × n, destroyed by the reduction
+  Matrix A;  // n × n, A's copy in range, destroyed by the reduction
+  const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // one spare entry for tqlrat
   Eigen::Matrix<typename Matrix::Scalar, Eigen::Dynamic, 1> scratch(2 * n);
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
   Eigen::VectorXd squares = subdiagonal.cwiseAbs2();  // n (the last entry is tqlrat's zero)
-  if (tridiagonal_eigenvalues(diagonal, squares)) return diagonal;
+  if (tridiagonal_eigenvalues(diagonal, squares)) return unit * diagonal;
   // 30 QL sweeps without convergence on one eigenvalue (not seen in tests): Eigen's QR.
   return Eigen::SelfAdjointEigenSolver<Matrix>(original, Eigen::EigenvaluesOnly).eigenvalues();
 }
@@ -242,7 +262,8 @@ template <class Matrix>
 void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors) {
   using Scalar = typename Matrix::Scalar;
   const Eigen::Index n = original.rows();
-  Matrix A = original;  // n × n: reduced in place, the reflectors' v below its diagonal
+  Matrix A;  // n × n: A's copy in range, reduced in place, the reflectors' v below its diagonal
+  const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // of T, one spare entry for tqlrat
   Eigen::Matrix<Scalar, Eigen::Dynamic, 1> scratch(2 * n);
   Reflectors<Scalar> kept{std::vector<Scalar>(std::max<Eigen::Index>(n - 2, 0)),
@@ -256,16 +277,30 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     vectors = eig.eigenvectors().leftCols(k);
     return;
   }
-  const Eigen::VectorXd off = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0));  // |beta|, n − 1
-  const double norm = std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  const double norm = eigenvalues.cwiseAbs().maxCoeff();  // ‖T‖₂ = ‖A‖₂ / unit
+  eigenvalues *= unit;
+  if (norm == 0) {  // A = 0: every vector is an eigenvector
+    vectors = Matrix::Identity(n, k);
+    return;
+  }
+  // The inverse iteration runs on T/‖T‖, so that a zero pivot's stand-in ε and the growth of the
+  // iterate (up to 1/ε) stay in range whatever A's scale is.
+  const Eigen::VectorXd a = diagonal / norm;                                   // n
+  const Eigen::VectorXd off = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0)) / norm;  // |beta| / ‖T‖, n − 1
   const double eps = std::numeric_limits<double>::epsilon();
   Eigen::MatrixXd found(n, k);  // eigenvectors of T, n × k
-  double sigma = 0;
+  double sigma = 0;             // shift, in units of ‖T‖
   for (int j = 0; j < k; ++j) {
     // A shift equal to the previous one (a repeated eigenvalue) is moved up by 10ε‖T‖: the
     // orthogonalisation then picks the next vector of the eigenspace.
-    sigma = j > 0 ? std::max(eigenvalues[j], sigma + 10 * eps * norm) : eigenvalues[j];
-    tridiagonal_eigenvector(diagonal, off, sigma, eps * norm, j, found);
+    const double value = eigenvalues[j] / unit / norm;
+    sigma = j > 0 ? std::max(value, sigma + 10 * eps) : value;
+    tridiagonal_eigenvector(a, off, sigma, eps, j, found);
+  }
+  if (!found.allFinite()) {  // not seen in tests; Eigen's decomposition as for a QL failure
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
+    vectors = eig.eigenvectors().leftCols(k);
+    return;
   }
   // Back to A: x = Q D u, D = diag(d) unitary with d₀ = 1, d_{i+1} = d_i beta_i / |beta_i| (so that
   // D T Dᴴ is the reduced matrix), Q = H₀ H₁ ⋯ H_{n−3}.
@@ -273,7 +308,7 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   Scalar phase = 1.0;
   for (Eigen::Index i = 0; i < n; ++i) {
     vectors.row(i) = phase * found.row(i);
-    if (i + 1 < n && off[i] > 0) phase *= kept.beta[i] / off[i];
+    if (i + 1 < n && subdiagonal[i] > 0) phase *= kept.beta[i] / subdiagonal[i];
   }
   for (Eigen::Index step = n - 3; step >= 0; --step) {
     const Scalar tau = kept.tau[step];
