@@ -83,30 +83,30 @@ bool cholesky_in_place(Matrix& A) {
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
 // eigenvectors of the k ≤ n smallest (n × k, orthonormal): tridiagonalize with the reflectors kept,
 // tridiagonal_eigenvalues, then inverse iteration on the tridiagonal matrix at each of the k
-// eigenvalues and the reflectors applied back (O(n²) a vector); Eigen's full decomposition only if
-// the QL iteration fails.
+// eigenvalues and the reflectors applied back (O(n²) a vector); unit vectors for A = 0; Eigen's full
+// decomposition only if the QL iteration fails or a vector comes out non-finite.
 void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors);
 void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors);
 
 // The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
 // n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
-// M + δI is not positive definite (M indefinite), a full eigen-decomposition is used instead.
+// M + δI is not positive definite (M indefinite), lowest_eigenpairs (O(n³) once) is used instead.
 // The real staircase and the complex one start from it.
 template <class Matrix>
 Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const Eigen::Index n = M.rows();
-  const auto full_decomposition = [&] {
+  const auto from_tridiagonal = [&] {
     Eigen::VectorXd eigenvalues;  // n, not used
     Matrix vectors;               // n × k
     lowest_eigenpairs(M, k, eigenvalues, vectors);
     return vectors;
   };
-  if (n <= full_up_to) return full_decomposition();  // small: the full decomposition is as cheap
+  if (n <= full_up_to) return from_tridiagonal();  // small: the reduction is as cheap
   const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
   Matrix L = M;  // n × n: M + δI, then its factor in the lower triangle (cholesky_in_place)
   L.diagonal().array() += shift;
-  if (!cholesky_in_place(L)) return full_decomposition();
+  if (!cholesky_in_place(L)) return from_tridiagonal();
   const auto lower = L.template triangularView<Eigen::Lower>();
   Matrix V(n, k + 2);  // deterministic start, n × (k + 2)
   for (Eigen::Index i = 0; i < n; ++i)

@@ -25,7 +25,7 @@ std::complex<double> conj_of(const std::complex<double>& x) { return std::conj(x
 // with |beta_k| is the same one up to a diagonal unitary similarity).
 template <class Scalar>
 struct Reflectors {
-  std::vector<Scalar> tau;   // n − 2 (0: no reflection at that step)
+  std::vector<double> tau;   // n − 2, real (0: no reflection at that step)
   std::vector<Scalar> beta;  // n − 1
 };
 
@@ -266,17 +266,17 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // of T, one spare entry for tqlrat
   Eigen::Matrix<Scalar, Eigen::Dynamic, 1> scratch(2 * n);
-  Reflectors<Scalar> kept{std::vector<Scalar>(std::max<Eigen::Index>(n - 2, 0)),
+  Reflectors<Scalar> kept{std::vector<double>(std::max<Eigen::Index>(n - 2, 0)),
                           std::vector<Scalar>(std::max<Eigen::Index>(n - 1, 0))};
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch, &kept);
   eigenvalues = diagonal;
   Eigen::VectorXd squares = subdiagonal.cwiseAbs2();
-  if (!tridiagonal_eigenvalues(eigenvalues, squares)) {  // as in eigenvalues_impl: Eigen's QR
+  const auto from_eigen = [&] {  // Eigen's decomposition, as eigenvalues_impl's fallback
     const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
     eigenvalues = eig.eigenvalues();
     vectors = eig.eigenvectors().leftCols(k);
-    return;
-  }
+  };
+  if (!tridiagonal_eigenvalues(eigenvalues, squares)) return from_eigen();
   const double norm = eigenvalues.cwiseAbs().maxCoeff();  // ‖T‖₂ = ‖A‖₂ / unit
   eigenvalues *= unit;
   if (norm == 0) {  // A = 0: every vector is an eigenvector
@@ -297,11 +297,7 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     sigma = j > 0 ? std::max(value, sigma + 10 * eps) : value;
     tridiagonal_eigenvector(a, off, sigma, eps, j, found);
   }
-  if (!found.allFinite()) {  // not seen in tests; Eigen's decomposition as for a QL failure
-    const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
-    vectors = eig.eigenvectors().leftCols(k);
-    return;
-  }
+  if (!found.allFinite()) return from_eigen();  // not seen in tests
   // Back to A: x = Q D u, D = diag(d) unitary with d₀ = 1, d_{i+1} = d_i beta_i / |beta_i| (so that
   // D T Dᴴ is the reduced matrix), Q = H₀ H₁ ⋯ H_{n−3}.
   vectors.resize(n, k);
@@ -311,8 +307,8 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     if (i + 1 < n && subdiagonal[i] > 0) phase *= kept.beta[i] / subdiagonal[i];
   }
   for (Eigen::Index step = n - 3; step >= 0; --step) {
-    const Scalar tau = kept.tau[step];
-    if (tau == Scalar(0)) continue;
+    const double tau = kept.tau[step];
+    if (tau == 0) continue;
     const Eigen::Index m = n - step - 1;
     const auto v = A.col(step).tail(m);  // the reflector's v
     for (int j = 0; j < k; ++j) {
