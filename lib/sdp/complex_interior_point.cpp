@@ -201,7 +201,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     factored = true;
     invert_lower_factor(ws.chol_z.L, ws.Lz_inv);   // lower triangular, zeros above
-    ws.W.noalias() = ws.Lz_inv.adjoint() * ws.Lz_inv;  // Z⁻¹
+    gram_of_lower_factor(ws.Lz_inv, ws.W);          // Z⁻¹ = Lz⁻ᴴ Lz⁻¹
     ws.M = (X.array() * ws.W.array().conjugate()).real();
     ws.chol_m.compute(ws.M);
     if (ws.chol_m.info() != Eigen::Success) {

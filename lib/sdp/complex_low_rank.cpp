@@ -175,7 +175,7 @@ Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) 
   ws.L.diagonal().array() += lambda;
   if (!cholesky_in_place(ws.L)) return Trial::shift_too_small;
   invert_lower_factor(ws.L, ws.L_inv);
-  ws.W.noalias() = ws.L_inv.adjoint() * ws.L_inv;
+  gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᴴ L⁻¹
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
   ws.llt.compute(ws.M);
   if (ws.llt.info() != Eigen::Success) return Trial::schur_not_definite;

@@ -182,7 +182,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     const Eigen::MatrixXd& Lx = exact_steps ? ws.Lx : ws.chol_x.matrixLLT();  // lower triangles are the factors
     const Eigen::MatrixXd& Lz = exact_steps ? ws.Lz : ws.chol_z.matrixLLT();
     invert_lower_factor(Lz, ws.Lz_inv);
-    ws.W.noalias() = ws.Lz_inv.transpose() * ws.Lz_inv;  // Z⁻¹
+    gram_of_lower_factor(ws.Lz_inv, ws.W);               // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
     if (exact_steps) invert_lower_factor(Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
     ws.chol_m.compute(ws.M);

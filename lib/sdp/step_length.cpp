@@ -144,7 +144,41 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
   inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
 }
 
+// Below this size W = Gᴴ G is one dense product (G lower triangular); above it the recursion.
+constexpr Eigen::Index kGramBlock = 32;
+
+// W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
+// (both triangles). With G = [A 0; B C] (A k × k and C m × m lower triangular, B m × k):
+//   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
+// the diagonal blocks by recursion, the rest by dense products: about n³/3 multiply-adds against
+// n³ for the product of the dense matrices.
+template <class Scalar>
+void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> G,
+                   Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> W) {
+  const Eigen::Index n = G.rows();
+  if (n <= kGramBlock) {
+    W.noalias() = G.adjoint() * G;
+    return;
+  }
+  const Eigen::Index k = n / 2, m = n - k;
+  gram_of_lower<Scalar>(G.topLeftCorner(k, k), W.topLeftCorner(k, k));
+  gram_of_lower<Scalar>(G.bottomRightCorner(m, m), W.bottomRightCorner(m, m));
+  W.topLeftCorner(k, k).noalias() += G.bottomLeftCorner(m, k).adjoint() * G.bottomLeftCorner(m, k);  // + Bᴴ B
+  W.bottomLeftCorner(m, k).noalias() = G.bottomRightCorner(m, m).adjoint() * G.bottomLeftCorner(m, k);  // Cᴴ B
+  W.topRightCorner(k, m) = W.bottomLeftCorner(m, k).adjoint();
+}
+
 }  // namespace
+
+void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
+  W.resize(G.rows(), G.cols());
+  gram_of_lower<double>(G, W);
+}
+
+void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
+  W.resize(G.rows(), G.cols());
+  gram_of_lower<std::complex<double>>(G, W);
+}
 
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
   inverse.resize(L.rows(), L.cols());
