@@ -3,13 +3,19 @@
 // the interior point from where it stopped when the polish does not certify. These tests check
 // that the stop happens below the asked gap and that a resumed run ends where one uninterrupted
 // run ends, on the scaled problem (‖C‖_F = 1) the solver passes in. The complex interior point
-// (the N × N Hermitian form of a complex-form cost) is checked against the real one.
+// (the N × N Hermitian form of a complex-form cost) is checked against the real one. The
+// triangular kernels of every iteration (L⁻¹ and Z⁻¹ = L⁻ᴴ L⁻¹ by recursive blocks) are checked
+// against dense products, across their blocking thresholds.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include <random>
+#include <type_traits>
+
 #include "internal.h"
 #include "sdp_test_costs.h"
+#include "step_length.h"
 
 namespace {
 
@@ -157,6 +163,45 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
   ASSERT_TRUE(warm.converged) << warm.reason;
   EXPECT_NEAR(objective(warm), objective(cold), 1e-9 * std::abs(objective(cold)));
   EXPECT_NEAR(warm.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
+}
+
+// Z (n × n, Hermitian positive definite: B Bᴴ + n I for a Gaussian B), its factor L, L⁻¹ by
+// invert_lower_factor and W by gram_of_lower_factor: L⁻¹ lower triangular with L⁻¹ L = I, and
+// W = L⁻ᴴ L⁻¹ = Z⁻¹, Hermitian and equal to the dense product to rounding.
+template <class Matrix>
+void expect_triangular_kernels(int n, std::mt19937& rng) {
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Matrix B(n, n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if constexpr (std::is_same_v<typename Matrix::Scalar, double>)
+        B(i, j) = gauss(rng);
+      else
+        B(i, j) = {gauss(rng), gauss(rng)};
+    }
+  const Matrix Z = B * B.adjoint() + n * Matrix::Identity(n, n);
+  Matrix L = Z;
+  ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
+  L = Matrix(L.template triangularView<Eigen::Lower>());
+  Matrix L_inv, W;
+  fact::sdp::detail::invert_lower_factor(L, L_inv);
+  fact::sdp::detail::gram_of_lower_factor(L_inv, W);
+  const Matrix I = Matrix::Identity(n, n);
+  EXPECT_LT((L_inv * L - I).cwiseAbs().maxCoeff(), 1e-13);
+  EXPECT_EQ(Matrix(L_inv.template triangularView<Eigen::StrictlyUpper>()).cwiseAbs().maxCoeff(), 0.0);
+  const Matrix dense = L_inv.adjoint() * L_inv;
+  EXPECT_LT((W - dense).cwiseAbs().maxCoeff(), 1e-14 * dense.cwiseAbs().maxCoeff());
+  EXPECT_LT((W * Z - I).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((W - Matrix(W.adjoint())).cwiseAbs().maxCoeff(), 1e-15 * dense.cwiseAbs().maxCoeff());
+}
+
+TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
+  std::mt19937 rng(13);
+  for (int n : {1, 2, 5, 24, 25, 32, 33, 48, 64, 65, 100, 129}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    expect_triangular_kernels<Eigen::MatrixXd>(n, rng);
+    expect_triangular_kernels<Eigen::MatrixXcd>(n, rng);
+  }
 }
 
 }  // namespace
