@@ -10,8 +10,6 @@
 
 #include <cmath>
 
-#include <random>
-#include <type_traits>
 
 #include "internal.h"
 #include "sdp_test_costs.h"
@@ -171,14 +169,7 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
 template <class Matrix>
 void expect_triangular_kernels(int n, std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Matrix B(n, n);
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if constexpr (std::is_same_v<typename Matrix::Scalar, double>)
-        B(i, j) = gauss(rng);
-      else
-        B(i, j) = {gauss(rng), gauss(rng)};
-    }
+  const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
   const Matrix Z = B * B.adjoint() + n * Matrix::Identity(n, n);
   Matrix L = Z;
   ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "internal.h"
+#include "sdp_test_costs.h"
 
 namespace {
 
@@ -20,17 +21,30 @@ double relative_difference(const Eigen::VectorXd& ours, const Eigen::VectorXd& r
   return (ours - reference).cwiseAbs().maxCoeff() / scale;
 }
 
+using fact::test::gaussian_matrix;
+
+// The real test matrices of size n: kind 0 B + Bᵀ (indefinite), kind 1 B Bᵀ with B n × n/3 (positive
+// semidefinite with a null space), kind 2 B Bᵀ + cluster·I (eigenvalues clustered around cluster).
+Eigen::MatrixXd real_test_matrix(int n, int kind, double cluster, std::mt19937& rng, std::normal_distribution<double>& gauss) {
+  const Eigen::MatrixXd B = gaussian_matrix<Eigen::MatrixXd>(n, kind == 1 ? std::max(1, n / 3) : n, rng, gauss);
+  Eigen::MatrixXd A = kind == 0 ? Eigen::MatrixXd(B + B.transpose()) : Eigen::MatrixXd(B * B.transpose());
+  if (kind == 2) A += cluster * Eigen::MatrixXd::Identity(n, n);
+  return A;
+}
+
+// B Bᴴ − I/2 with B complex n × n/4: an S with a null space, so a repeated lowest eigenvalue −1/2.
+Eigen::MatrixXcd hermitian_test_matrix(int n, std::mt19937& rng, std::normal_distribution<double>& gauss) {
+  const Eigen::MatrixXcd B = gaussian_matrix<Eigen::MatrixXcd>(n, std::max(1, n / 4), rng, gauss);
+  return B * B.adjoint() - 0.5 * Eigen::MatrixXcd::Identity(n, n);
+}
+
 TEST(SdpSpectrum, RealEigenvaluesMatchEigen) {
   std::mt19937 rng(3);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (int n = 1; n <= 40; ++n) {
     for (int kind = 0; kind < 3; ++kind) {
       SCOPED_TRACE("n = " + std::to_string(n) + ", kind " + std::to_string(kind));
-      Eigen::MatrixXd B(n, kind == 1 ? std::max(1, n / 3) : n);  // kind 1: rank n/3, PSD
-      for (Eigen::Index j = 0; j < B.cols(); ++j)
-        for (Eigen::Index i = 0; i < n; ++i) B(i, j) = gauss(rng);
-      Eigen::MatrixXd A = kind == 0 ? Eigen::MatrixXd(B + B.transpose()) : Eigen::MatrixXd(B * B.transpose());
-      if (kind == 2) A += 1e3 * Eigen::MatrixXd::Identity(n, n);  // clustered around 1000
+      const Eigen::MatrixXd A = real_test_matrix(n, kind, 1e3, rng, gauss);
       const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues();
       const Eigen::VectorXd ours = eigenvalues_of(A);
       ASSERT_EQ(ours.size(), n);
@@ -47,10 +61,7 @@ TEST(SdpSpectrum, HermitianEigenvaluesMatchEigen) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (int n = 1; n <= 40; ++n) {
     SCOPED_TRACE("n = " + std::to_string(n));
-    Eigen::MatrixXcd B(n, std::max(1, n / 4));  // rank n/4: an S with a null space
-    for (Eigen::Index j = 0; j < B.cols(); ++j)
-      for (Eigen::Index i = 0; i < n; ++i) B(i, j) = {gauss(rng), gauss(rng)};
-    const Eigen::MatrixXcd A = B * B.adjoint() - 0.5 * Eigen::MatrixXcd::Identity(n, n);
+    const Eigen::MatrixXcd A = hermitian_test_matrix(n, rng, gauss);
     const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(A, Eigen::EigenvaluesOnly).eigenvalues();
     const Eigen::VectorXd ours = eigenvalues_of(A);
     ASSERT_EQ(ours.size(), n);
@@ -99,12 +110,7 @@ TEST(SdpSpectrum, LowestRealEigenvectorsHaveSmallResiduals) {
   for (int n = 1; n <= 40; ++n) {
     for (int kind = 0; kind < 3; ++kind) {
       SCOPED_TRACE("n = " + std::to_string(n) + ", kind " + std::to_string(kind));
-      Eigen::MatrixXd B(n, kind == 1 ? std::max(1, n / 3) : n);  // kind 1: PSD of rank n/3, a null space
-      for (Eigen::Index j = 0; j < B.cols(); ++j)
-        for (Eigen::Index i = 0; i < n; ++i) B(i, j) = gauss(rng);
-      Eigen::MatrixXd A = kind == 0 ? Eigen::MatrixXd(B + B.transpose()) : Eigen::MatrixXd(B * B.transpose());
-      if (kind == 2) A -= 1e3 * Eigen::MatrixXd::Identity(n, n);  // clustered around −1000
-      expect_lowest_eigenpairs(A, std::min(n, 3));
+      expect_lowest_eigenpairs(real_test_matrix(n, kind, -1e3, rng, gauss), std::min(n, 3));
     }
   }
 }
@@ -114,11 +120,7 @@ TEST(SdpSpectrum, LowestHermitianEigenvectorsHaveSmallResiduals) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (int n = 1; n <= 40; ++n) {
     SCOPED_TRACE("n = " + std::to_string(n));
-    Eigen::MatrixXcd B(n, std::max(1, n / 4));  // rank n/4: a repeated lowest eigenvalue −0.5
-    for (Eigen::Index j = 0; j < B.cols(); ++j)
-      for (Eigen::Index i = 0; i < n; ++i) B(i, j) = {gauss(rng), gauss(rng)};
-    const Eigen::MatrixXcd A = B * B.adjoint() - 0.5 * Eigen::MatrixXcd::Identity(n, n);
-    expect_lowest_eigenpairs(A, std::min(n, 2));
+    expect_lowest_eigenpairs(hermitian_test_matrix(n, rng, gauss), std::min(n, 2));
   }
 }
 
@@ -148,10 +150,7 @@ TEST(SdpSpectrum, LowestEigenvectorsAtAnyScale) {
   expect_lowest_eigenpairs(Eigen::MatrixXd(Eigen::MatrixXd::Zero(1, 1)), 1);
   std::mt19937 rng(11);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Eigen::MatrixXd B(8, 8);
-  for (Eigen::Index j = 0; j < 8; ++j)
-    for (Eigen::Index i = 0; i < 8; ++i) B(i, j) = gauss(rng);
-  const Eigen::MatrixXd A = B + B.transpose();
+  const Eigen::MatrixXd A = real_test_matrix(8, 0, 0.0, rng, gauss);
   for (double scale : {1e-300, 1e300}) {
     SCOPED_TRACE("scale " + std::to_string(scale));
     expect_lowest_eigenpairs(Eigen::MatrixXd(scale * A), 2);
