@@ -73,6 +73,44 @@ TEST(SdpInteriorPoint, NoHandoffGapNeverHandsOff) {
   EXPECT_LT(gap_of(C, ip), 1e-7) << ip.reason;
 }
 
+// The real interior point from the rank-2 factor of the automatic solve's first attempt (noisy
+// plain form, N = 8, whose optimum has rank > 2, so the attempt does not certify): the start is
+// strictly feasible (identity blocks, X ≻ 0, C − Λ ≻ 0) and the run from it ends at the optimum
+// of the run from X = I. Multipliers no shift up to 1 makes dual feasible give no start.
+TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
+  const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
+  Options rank_two;
+  rank_two.method = fact::sdp::Method::low_rank;
+  rank_two.max_rank = 2;
+  rank_two.max_newton_iterations = 25;
+  const fact::sdp::detail::LowRankOutcome attempt = fact::sdp::detail::solve_low_rank(C, 2, rank_two);
+  ASSERT_FALSE(attempt.certified);
+  ASSERT_EQ(attempt.Y.cols(), 2);
+
+  InteriorPointOutcome start;
+  ASSERT_TRUE(fact::sdp::detail::interior_start(C, 2, attempt.Y, attempt.certificate.lambda, 0.65, start));
+  EXPECT_EQ(start.iterations, 0);
+  expect_feasible(start);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(fact::sdp::detail::certificate_matrix(C, start.lambda, 2)).info(),
+            Eigen::Success);
+
+  const Options o;
+  const InteriorPointOutcome cold = solve_interior_point(C, 2, o);
+  const InteriorPointOutcome warm = solve_interior_point(C, 2, o, 0.0, &start);
+  ASSERT_TRUE(cold.converged) << cold.reason;
+  ASSERT_TRUE(warm.converged) << warm.reason;
+  expect_feasible(warm);
+  EXPECT_LT(gap_of(C, warm), 1e-7);
+  EXPECT_NEAR(C.cwiseProduct(warm.X).sum(), C.cwiseProduct(cold.X).sum(), 1e-7);
+
+  InteriorPointOutcome untouched;
+  // Λ_ii = 10·I₂: C − Λ + s·I has λ_max(C) − 10 + s < 0 for s ≤ 1 (λ_max(C) ≤ ‖C‖_F = 1)
+  const Eigen::MatrixXd too_large = 10.0 * Eigen::Matrix2d::Identity().replicate(C.rows() / 2, 1);
+  EXPECT_FALSE(fact::sdp::detail::interior_start(C, 2, attempt.Y, too_large, 0.65, untouched));
+  EXPECT_EQ(untouched.X.size(), 0);
+}
+
 // The complex interior point on H (the Hermitian form of complex_form(noisy plain cost), scaled):
 // its X is Hermitian PSD with unit diagonal, S = H − diag(y) is PSD, the gap is below the
 // tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H).

@@ -242,6 +242,24 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   return out;
 }
 
+bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
+                    double mix, InteriorPointOutcome& start) {
+  const Eigen::Index n = C.rows();
+  Eigen::MatrixXd Z(n, n);  // C − Λ + s·I, factored in place
+  for (double shift = 1e-3; shift <= 1.0; shift *= 10) {
+    certificate_matrix(C, lambda, d, Z);
+    Z.diagonal().array() += shift;
+    if (!cholesky_in_place(Z)) continue;
+    start.X.noalias() = (1.0 - mix) * (Y * Y.transpose());
+    start.X.diagonal().array() += mix;
+    start.lambda = lambda;
+    for (Eigen::Index i = 0; i < n; i += d) start.lambda.middleRows(i, d).diagonal().array() -= shift;
+    start.iterations = 0;
+    return true;
+  }
+  return false;
+}
+
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol) {
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(X);
   const Eigen::VectorXd& w = eig.eigenvalues();  // ascending

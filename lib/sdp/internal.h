@@ -247,6 +247,15 @@ struct InteriorPointOutcome {
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
                                           double handoff_gap = 0, const InteriorPointOutcome* resume = nullptr);
 
+// A strictly feasible start for the interior point from a factor Y (n × r, orthonormal-row d × r
+// blocks) of a point near the optimum and its multipliers lambda (n × d, Λ_ii stacked; the
+// rank-d attempt's, which did not certify): X = (1 − mix)·Y Yᵀ + mix·I (identity blocks, positive
+// definite for mix > 0) and Λ − s·I, with s the first of 1e-3, 1e-2, … 1 for which
+// C − Λ + s·I passes a Cholesky test. iterations is 0. False, and start untouched, when no s
+// passes. The real counterpart of complex_interior_start.
+bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
+                    double mix, InteriorPointOutcome& start);
+
 // The factor of largest rank r ≤ n with X = Y Yᵀ (eigenvalues below tol·max dropped).
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
 

@@ -52,12 +52,13 @@ constexpr int kComplexPolishSteps = 4;
 constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
-// The complex interior point starts from the staircase's last factor Y, X = (1 − mix) Y Yᴴ + mix·I
-// with mix = kComplexStartMix, instead of X = I. Tight sweeps (8 seeds, interleaved in one
+// Both interior points start from the low-rank path's last factor Y, X = (1 − mix) Y Yᴴ + mix·I
+// with mix = kInteriorStartMix, instead of X = I. Tight sweeps (8 seeds, interleaved in one
 // process), mix 0.5 against X = I: −27 % time at N = 32, −2 % at 64, −6 % at 100 (noise 0.05),
 // −10 % and −39 % at N = 32 and 64 with noise 0.01; 0.65 against 0.5: +1.5 %, −4 %, −10 % at
-// N = 32, 64, 100 (BENCHMARKS.md, session 17).
-constexpr double kComplexStartMix = 0.65;
+// N = 32, 64, 100 (BENCHMARKS.md, session 17). The real one from the rank-d attempt: 2–4 fewer
+// iterations to the hand-off on plain_noisy N = 5 … 16, mix 0.5 … 0.8 alike (session 19).
+constexpr double kInteriorStartMix = 0.65;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -161,7 +162,7 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
 }
 
 // The complex interior point on H (complex form, automatic mode), started from the staircase's
-// factor staircase_Y (2N × 2p, real form; complex_interior_start with kComplexStartMix; X = I and
+// factor staircase_Y (2N × 2p, real form; complex_interior_start with kInteriorStartMix; X = I and
 // y = −2 when that finds no dual shift or the warm start stalls), handed to complex Newton at
 // kComplexHandoffGap and, when that does not certify, resumed and run to convergence. Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
@@ -171,7 +172,8 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexInteriorPointOutcome start;
   const bool warm = staircase_Y.size() > 0 &&
-                    detail::complex_interior_start(H, detail::complex_of_real_factor(staircase_Y), kComplexStartMix, start);
+                    detail::complex_interior_start(H, detail::complex_of_real_factor(staircase_Y),
+                                                   kInteriorStartMix, start);
   detail::ComplexInteriorPointOutcome ip =
       detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
   if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (4 of 240 sweep instances,
@@ -243,14 +245,29 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   return c;
 }
 
-// The interior point. In automatic mode, for n ≤ kEarlyPolishMaxRows, it hands off at
-// kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps when that polish's system
+// The interior point. For n ≤ kEarlyPolishMaxRows it starts from the rank-d attempt's factor and
+// multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
+// finds no dual shift or the warm run stalls); above, the warm start measured 0 … +20 % slower
+// (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
+// near the end and restarted cold). In automatic mode, for n ≤ kEarlyPolishMaxRows, it hands off
+// at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps when that polish's system
 // is small (kEarlyPolishPerRow unknowns per row), and resumes where it stopped when the polish
 // does not certify.
-Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form) {
+Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form,
+                              const Candidate* warm = nullptr) {
   const int n = static_cast<int>(C.rows());
   const bool early = o.method == Method::automatic && (n <= kEarlyPolishMaxRows || complex_form);
-  const detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, early ? kHandoffGap : 0.0);
+  const double handoff = early ? kHandoffGap : 0.0;
+  detail::InteriorPointOutcome start;
+  const bool warm_start = n <= kEarlyPolishMaxRows && warm && warm->Y.cols() >= d &&
+                          warm->cert.lambda.size() > 0 &&
+                          detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
+  detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, handoff, warm_start ? &start : nullptr);
+  if (warm_start && !ip.handed_off && !ip.converged) {  // the warm start stalled: start cold
+    const int wasted = ip.iterations;
+    ip = detail::solve_interior_point(C, d, o, handoff);
+    ip.iterations += wasted;
+  }
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
   if (complex_form) {
@@ -363,7 +380,8 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     // not certify.
     Candidate ip;
     if (complex_form) ip = from_complex_interior_point(Cs, options, best.Y);
-    if (!complex_form || !is_certified(ip, options)) ip = from_interior_point(Cs, d, options, complex_form);
+    if (!complex_form || !is_certified(ip, options))
+      ip = from_interior_point(Cs, d, options, complex_form, try_low_rank && !complex_form ? &best : nullptr);
     ip.iterations += best.iterations;
     if (options.method == Method::automatic && !is_certified(ip, options)) {
       std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60);
