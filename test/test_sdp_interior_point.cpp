@@ -76,7 +76,7 @@ TEST(SdpInteriorPoint, NoHandoffGapNeverHandsOff) {
 // The real interior point from the rank-2 factor of the automatic solve's first attempt (noisy
 // plain form, N = 8, whose optimum has rank > 2, so the attempt does not certify): the start is
 // strictly feasible (identity blocks, X ≻ 0, C − Λ ≻ 0) and the run from it ends at the optimum
-// of the run from X = I. Multipliers no shift up to 1 makes dual feasible give no start.
+// of the run from X = I. Multipliers that no shift up to 1 makes dual feasible give no start.
 TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
   const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
   Options rank_two;

@@ -242,8 +242,8 @@ struct InteriorPointOutcome {
 
 // Primal–dual path following with the HKM direction and a Mehrotra corrector. It stops once
 // the relative gap is below handoff_gap (> 0: handed_off is set), so a caller can try a cheaper
-// finish; `resume` (an outcome that handed off) continues from its X and Λ, which are strictly
-// feasible, instead of X = I.
+// finish; `resume` (an outcome that handed off, or an interior_start) continues from its X and Λ,
+// which are strictly feasible, instead of X = I; its iterations count toward max_ipm_iterations.
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
                                           double handoff_gap = 0, const InteriorPointOutcome* resume = nullptr);
 
