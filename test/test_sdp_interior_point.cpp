@@ -90,6 +90,9 @@ TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
   InteriorPointOutcome start;
   ASSERT_TRUE(fact::sdp::detail::interior_start(C, 2, attempt.Y, attempt.certificate.lambda, 0.65, start));
   EXPECT_EQ(start.iterations, 0);
+  const Eigen::MatrixXd expected_X =
+      0.35 * attempt.Y * attempt.Y.transpose() + 0.65 * Eigen::MatrixXd::Identity(C.rows(), C.rows());
+  EXPECT_LT((start.X - expected_X).cwiseAbs().maxCoeff(), 1e-14);  // the factor, mixed with I
   expect_feasible(start);
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(fact::sdp::detail::certificate_matrix(C, start.lambda, 2)).info(),

@@ -1,7 +1,8 @@
 // Primal–dual interior point for  min ⟨C,X⟩  s.t.  X_ii = I_d,  X ⪰ 0.
 //
-// Feasible start (X = I, Λ = −2I so Z = C − Λ ≻ 0 because ‖C‖_F = 1), HKM search
-// direction, Mehrotra predictor–corrector. Because both residuals stay zero, ΔZ = −Aᵀ(Δy)
+// Feasible start (X = I, Λ = −2I so Z = C − Λ ≻ 0 because ‖C‖_F = 1; or a handed-off iterate to
+// resume from, or interior_start's point near a low-rank factor), HKM search direction, Mehrotra
+// predictor–corrector. Because both residuals stay zero, ΔZ = −Aᵀ(Δy)
 // is block diagonal, which keeps every product with ΔZ at O(n² d).
 //
 // Constraints p = (block i, a ≤ b) pick entries (u, v) = (d·i+a, d·i+b):

@@ -52,12 +52,14 @@ constexpr int kComplexPolishSteps = 4;
 constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
-// Both interior points start from the low-rank path's last factor Y, X = (1 − mix) Y Yᴴ + mix·I
-// with mix = kInteriorStartMix, instead of X = I. Tight sweeps (8 seeds, interleaved in one
-// process), mix 0.5 against X = I: −27 % time at N = 32, −2 % at 64, −6 % at 100 (noise 0.05),
-// −10 % and −39 % at N = 32 and 64 with noise 0.01; 0.65 against 0.5: +1.5 %, −4 %, −10 % at
-// N = 32, 64, 100 (BENCHMARKS.md, session 17). The real one from the rank-d attempt: 2–4 fewer
-// iterations to the hand-off on plain_noisy N = 5 … 16, mix 0.5 … 0.8 alike (session 19).
+// In automatic mode the interior points start from the low-rank path's last factor Y,
+// X = (1 − mix) Y Yᴴ + mix·I with mix = kInteriorStartMix, instead of X = I: the complex one from
+// the staircase's factor, the real one (not on the complex form) from the rank-d attempt's for
+// n ≤ kEarlyPolishMaxRows. Complex, tight sweeps (8 seeds, interleaved in one process), mix 0.5
+// against X = I: −27 % time at N = 32, −2 % at 64, −6 % at 100 (noise 0.05), −10 % and −39 % at
+// N = 32 and 64 with noise 0.01; 0.65 against 0.5: +1.5 %, −4 %, −10 % at N = 32, 64, 100
+// (BENCHMARKS.md, session 17). Real: 2–4 fewer iterations to the hand-off on plain_noisy
+// N = 5 … 16, mix 0.5 … 0.8 alike (session 19).
 constexpr double kInteriorStartMix = 0.65;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
