@@ -93,7 +93,14 @@ bool is_certified(const Candidate& c, const Options& o) {
   return c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol;
 }
 
-// A low-rank candidate whose S is PSD within psd_tol but whose bound tr Λ + n·λ_min(S) misses the
+// The certificate of a factor Y (n × r, feasible) against its own multipliers Λ(Y), and the
+// primal objective, into c.
+void certify_factor(const Eigen::MatrixXd& C, int d, Candidate& c) {
+  c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
+  c.primal = primal_objective(C, c.Y, c.cert, d);
+}
+
+// A Newton candidate whose S is PSD within psd_tol but whose bound tr Λ + n·λ_min(S) misses the
 // gap. Newton stops at ‖grad‖ < 1e-12, where λ_min(S) is of the order of ‖grad‖ and n·|λ_min| can
 // exceed the gap tolerance on a small optimum (noise-free plain form, N = 4, seed 9, tested:
 // λ_min(S) ≈ −1e-13 and a relative gap of a few 1e-9, and the interior point ran after Newton
@@ -102,6 +109,19 @@ bool is_certified(const Candidate& c, const Options& o) {
 // start that certifies pays nothing.
 bool misses_only_the_gap(const Candidate& c, const Options& o) {
   return c.cert.min_eig >= -o.psd_tol && !is_certified(c, o);
+}
+
+// c after one more Newton step (grad_tol 0: always taken, unless no damping is accepted) when it
+// misses only the gap and the step certifies; c itself otherwise. c's certificate is its own
+// factor's (certify_factor).
+Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
+  if (!misses_only_the_gap(c, o)) return c;
+  Candidate next = c;
+  const int steps = detail::newton_refine(C, d, next.Y, 1, 0.0);
+  if (steps == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
+  next.iterations += steps;
+  certify_factor(C, d, next);
+  return is_certified(next, o) ? next : c;
 }
 
 // In automatic mode the low-rank path only tries rank d (the tight case, where Newton has
@@ -116,14 +136,7 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o);
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
-  if (!misses_only_the_gap(c, o)) return c;
-  Candidate next = c;  // one more Newton step (grad_tol 0: always taken, unless no damping is accepted)
-  const int steps = detail::newton_refine(C, d, next.Y, 1, 0.0);
-  if (steps == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
-  next.iterations += steps;
-  next.cert = detail::certify(C, detail::lambda_from_factor(C, next.Y, d), d, false);
-  next.primal = primal_objective(C, next.Y, next.cert, d);
-  return is_certified(next, o) ? next : c;
+  return with_one_more_step(C, d, std::move(c), o);
 }
 
 // A complex outcome on H (C = emb(H), scaled) as a candidate: factor and certificate in d = 2 terms.
@@ -242,8 +255,7 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   Candidate c = ip;
   c.iterations += detail::newton_refine(C, d, Y, max_steps, 1e-12);
   c.Y = std::move(Y);
-  c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
-  c.primal = primal_objective(C, c.Y, c.cert, d);
+  certify_factor(C, d, c);
   return c;
 }
 
@@ -304,24 +316,34 @@ int nullity(const Certificate& cert, const Options& o) {
   return static_cast<int>((cert.eigenvalues.array() < o.null_tol).count());
 }
 
-// A certificate whose S has nullity exactly d proves the optimum unique and of rank d: any optimal
-// X puts at most G / λ_{d+1}(S) of weight outside S's null space (G the absolute gap). The
-// interior point's own X can still have a numerical rank above d there, with weight below that
-// bound (noise-free plain form, N = 4, seed 35: rank 3, λ_3(S) = 3.2e-9). Newton at rank d from
-// X's top-d eigenvectors then gives the rank-d optimum, which is kept when it certifies against
-// the same Λ (Λ from the new factor would be ≈ 0 there, and S ≈ C would lose the uniqueness proof).
-// Automatic mode only (an explicit method returns its own factor), for a factor of numerical rank > d.
+// A certificate whose S has nullity exactly d proves the optimum unique and of rank d. Such a
+// proof is only path-independent when Λ is the optimum's own multiplier: for a rank-d optimum Y
+// (n × d, every d × d block orthogonal) S Y = 0 forces Λ_ii = (C Y)_i Y_iᵀ, so that Λ is the only
+// optimal dual, and whether its S has nullity d is a property of the problem. The interior point's
+// Λ is only near-optimal; where the optimum is not strictly complementary (noise-free plain form,
+// N + 1 rounds: the optimum is 0, the only optimal Λ is 0 and S = C has nullity N − 1) its S still
+// shows λ_{d+1} of the order of √μ, above or below null_tol depending on where the iterations
+// stopped, and the status then depended on the path and on the machine's rounding (the ARM64
+// cross check: x86-64 "unique" through the interior point, arm64 "not unique" through rank-d
+// Newton, BENCHMARKS.md, session 20). A staircase level still crawling toward such an optimum
+// does the same through its unconverged factor (complex form, N = 4, 2 rounds, seed 32: X of
+// rank 4 after 59 steps, λ_3(S) = 1.1e-10). So a result whose certificate claims nullity d, from
+// the interior point or with X of numerical rank above d, is taken to rank d (Newton from X's
+// top-d eigenvectors) and certified against that factor's own Λ, which then decides the status;
+// when that does not certify the result stands as it was. Automatic mode only (an explicit method
+// returns its own factor and certificate).
 Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d) return c;
   // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
-  // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor; this path is rare): n × d.
+  // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor): n × d.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(c.Y.transpose() * c.Y);
   Eigen::MatrixXd Y = c.Y * gram.eigenvectors().rightCols(d);
   if (!detail::project_blocks(Y, d)) return c;
   Candidate polished = c;
   polished.iterations += detail::newton_refine(C, d, Y, 20, 1e-12);
   polished.Y = std::move(Y);
-  polished.primal = primal_objective(C, polished.Y, polished.cert, d);
+  certify_factor(C, d, polished);
+  polished = with_one_more_step(C, d, std::move(polished), o);
   return is_certified(polished, o) ? polished : c;
 }
 
@@ -395,7 +417,8 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
       best = ip;
   }
   int rank = numerical_rank(best.Y);
-  if (options.method == Method::automatic && rank > d) {
+  // (a low-rank path's rank-d certificate is its own factor's already)
+  if (options.method == Method::automatic && (rank > d || (rank == d && best.method == Method::interior_point))) {
     best = at_unique_rank(Cs, d, std::move(best), options);
     rank = numerical_rank(best.Y);
   }
