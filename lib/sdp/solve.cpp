@@ -246,8 +246,12 @@ PolishSize polish_size(const Eigen::MatrixXd& Y, int d) {
 // Newton system has at most max_unknowns unknowns, for at most max_steps steps; nullopt when it
 // does not run. The interior point finds the optimal face reliably, but when the optimum is
 // small against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
-// quadratically from there.
-std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate& ip, int max_unknowns, int max_steps) {
+// quadratically from there. A polished point short only of the gap takes one more step
+// (with_one_more_step): the benchmark's plain_noisy N = 6 handed off at a relative gap of 1e-5,
+// was polished to λ_min(S) = −9e-14 and a gap of 4.1e-9, and the interior point resumed: 27
+// iterations and steps in all, 23 with the one step.
+std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate& ip, int max_unknowns, int max_steps,
+                                const Options& o) {
   const PolishSize size = polish_size(ip.Y, d);
   if (size.rank < d || size.unknowns > max_unknowns) return std::nullopt;
   Eigen::MatrixXd Y = ip.Y.leftCols(size.rank);
@@ -256,7 +260,7 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   c.iterations += detail::newton_refine(C, d, Y, max_steps, 1e-12);
   c.Y = std::move(Y);
   certify_factor(C, d, c);
-  return c;
+  return with_one_more_step(C, d, std::move(c), o);
 }
 
 // The interior point. For n ≤ kEarlyPolishMaxRows it starts from the rank-d attempt's factor and
@@ -292,7 +296,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
     handed.Y = detail::factor_psd(ip.X, 0.0);
     handed.iterations = ip.iterations;
     handed.method = Method::interior_point;
-    polished = polish(C, d, handed, kEarlyPolishPerRow * n, kEarlyPolishSteps);
+    polished = polish(C, d, handed, kEarlyPolishPerRow * n, kEarlyPolishSteps, o);
   }
   if (polished && is_certified(*polished, o)) return *polished;
   detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
@@ -408,7 +412,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
       ip = from_interior_point(Cs, d, options, complex_form, try_low_rank && !complex_form ? &best : nullptr);
     ip.iterations += best.iterations;
     if (options.method == Method::automatic && !is_certified(ip, options)) {
-      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60);
+      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60, options);
       if (polished && is_certified(*polished, options)) ip = std::move(*polished);
     }
     // (a staircase outcome without a spectrum has no bound: the interior point's result replaces it)
