@@ -161,7 +161,7 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns, !automatic);
   Candidate c = candidate_of(C, out, Method::complex_low_rank);
   if (!misses_only_the_gap(c, o)) return c;
-  const int steps = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as in from_low_rank
+  const int steps = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as with_one_more_step (complex)
   if (steps == 0) return c;
   Candidate next = candidate_of(C, detail::complex_outcome(H, std::move(out.Y), out.iterations + steps, false),
                                 Method::complex_low_rank);
@@ -334,9 +334,11 @@ int nullity(const Certificate& cert, const Options& o) {
 // rank 4 after 59 steps, λ_3(S) = 1.1e-10). So a result whose certificate claims nullity d, from
 // the interior point or with X of numerical rank above d, is taken to rank d (Newton from X's
 // top-d eigenvectors) and certified against that factor's own Λ, which then decides the status;
-// when that does not certify the result stands as it was. Automatic mode only (an explicit method
-// returns its own factor and certificate).
-Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
+// when that does not certify the result stands as it was. On the complex form Λ keeps the form
+// μ_i I₂ (each block replaced by half its trace, which for a factor of the complex form only
+// removes rounding) so its certificate stays that of the Hermitian problem. Automatic mode only
+// (an explicit method returns its own factor and certificate).
+Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d) return c;
   // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
   // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor): n × d.
@@ -348,6 +350,15 @@ Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Opt
   polished.Y = std::move(Y);
   certify_factor(C, d, polished);
   polished = with_one_more_step(C, d, std::move(polished), o);
+  if (complex_form) {
+    Eigen::MatrixXd lambda = polished.cert.lambda;  // n × 2, blocks stacked
+    for (Eigen::Index i = 0; i < lambda.rows(); i += 2) {
+      const double mu = 0.5 * (lambda(i, 0) + lambda(i + 1, 1));
+      lambda.middleRows<2>(i) = mu * Eigen::Matrix2d::Identity();
+    }
+    polished.cert = detail::certify(C, lambda, d, false);
+    polished.primal = primal_objective(C, polished.Y, polished.cert, d);
+  }
   return is_certified(polished, o) ? polished : c;
 }
 
@@ -365,8 +376,9 @@ void classify(Result& r, const Candidate& c, const Options& o) {
     r.reason = printed("relative duality gap %g > %g", r.rel_gap, o.gap_tol) + note;
     r.status = Status::not_certified;
   } else if (r.nullity != r.d) {
-    // Nullity above d does not prove other optima exist (a different Λ may have nullity d; the
-    // noise-free plain form has such instances): the reason says no more than the certificate.
+    // Nullity above d does not prove other optima exist (the optimum may be unique without being
+    // strictly complementary, as on noise-free rounds with few of them; see at_unique_rank): the
+    // reason says no more than the certificate.
     r.reason = printed("optimal, but S has nullity %d > d = %d (λ_%d(S) = %g < %g): other optima may exist; X has rank %d",
                        r.nullity, r.d, r.d + 1, r.eig_gap, o.null_tol, r.rank);
     r.status = Status::certified_not_unique;
@@ -423,7 +435,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   int rank = numerical_rank(best.Y);
   // (a low-rank path's rank-d certificate is its own factor's already)
   if (options.method == Method::automatic && (rank > d || (rank == d && best.method == Method::interior_point))) {
-    best = at_unique_rank(Cs, d, std::move(best), options);
+    best = at_unique_rank(Cs, d, std::move(best), options, complex_form);
     rank = numerical_rank(best.Y);
   }
 
