@@ -94,9 +94,15 @@ bool is_certified(const Candidate& c, const Options& o) {
 }
 
 // The certificate of a factor Y (n × r, feasible) against its own multipliers Λ(Y), and the
-// primal objective, into c.
-void certify_factor(const Eigen::MatrixXd& C, int d, Candidate& c) {
-  c.cert = detail::certify(C, detail::lambda_from_factor(C, c.Y, d), d, false);
+// primal objective, into c. With complex_form (d = 2, C = emb(H)) each block of Λ is replaced by
+// half its trace times I₂, the form μ_i I₂ of the Hermitian problem's certificate: for a factor of
+// the complex form that only removes rounding.
+void certify_factor(const Eigen::MatrixXd& C, int d, Candidate& c, bool complex_form = false) {
+  Eigen::MatrixXd lambda = detail::lambda_from_factor(C, c.Y, d);  // n × d, blocks stacked
+  if (complex_form)
+    for (Eigen::Index i = 0; i < lambda.rows(); i += 2)
+      lambda.middleRows<2>(i) = 0.5 * (lambda(i, 0) + lambda(i + 1, 1)) * Eigen::Matrix2d::Identity();
+  c.cert = detail::certify(C, lambda, d, false);
   c.primal = primal_objective(C, c.Y, c.cert, d);
 }
 
@@ -113,14 +119,14 @@ bool misses_only_the_gap(const Candidate& c, const Options& o) {
 
 // c after one more Newton step (grad_tol 0: always taken, unless no damping is accepted) when it
 // misses only the gap and the step certifies; c itself otherwise. c's certificate is its own
-// factor's (certify_factor).
-Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o) {
+// factor's (certify_factor, with the same complex_form).
+Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form = false) {
   if (!misses_only_the_gap(c, o)) return c;
   Candidate next = c;
   const int steps = detail::newton_refine(C, d, next.Y, 1, 0.0);
   if (steps == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
   next.iterations += steps;
-  certify_factor(C, d, next);
+  certify_factor(C, d, next, complex_form);
   return is_certified(next, o) ? next : c;
 }
 
@@ -335,9 +341,8 @@ int nullity(const Certificate& cert, const Options& o) {
 // the interior point or with X of numerical rank above d, is taken to rank d (Newton from X's
 // top-d eigenvectors) and certified against that factor's own Λ, which then decides the status;
 // when that does not certify the result stands as it was. On the complex form Λ keeps the form
-// μ_i I₂ (each block replaced by half its trace, which for a factor of the complex form only
-// removes rounding) so its certificate stays that of the Hermitian problem. Automatic mode only
-// (an explicit method returns its own factor and certificate).
+// μ_i I₂ (certify_factor's complex_form), so its certificate stays that of the Hermitian problem.
+// Automatic mode only (an explicit method returns its own factor and certificate).
 Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d) return c;
   // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
@@ -348,17 +353,8 @@ Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Opt
   Candidate polished = c;
   polished.iterations += detail::newton_refine(C, d, Y, 20, 1e-12);
   polished.Y = std::move(Y);
-  certify_factor(C, d, polished);
-  polished = with_one_more_step(C, d, std::move(polished), o);
-  if (complex_form) {
-    Eigen::MatrixXd lambda = polished.cert.lambda;  // n × 2, blocks stacked
-    for (Eigen::Index i = 0; i < lambda.rows(); i += 2) {
-      const double mu = 0.5 * (lambda(i, 0) + lambda(i + 1, 1));
-      lambda.middleRows<2>(i) = mu * Eigen::Matrix2d::Identity();
-    }
-    polished.cert = detail::certify(C, lambda, d, false);
-    polished.primal = primal_objective(C, polished.Y, polished.cert, d);
-  }
+  certify_factor(C, d, polished, complex_form);
+  polished = with_one_more_step(C, d, std::move(polished), o, complex_form);
   return is_certified(polished, o) ? polished : c;
 }
 
