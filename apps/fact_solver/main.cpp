@@ -228,7 +228,8 @@ int main(int argc, char** argv) {
   if (const int code = fact::app::parse_flags(app, argc, argv, kApp, [&] { estimate_options = check(options); }); code >= 0) return code;
 
   const fact::app::Log log(kApp, options.common.drone_id);
-  fact::keep_freed_memory();  // each round's solve reuses the last one's memory (fact/memory.h)
+  if (!fact::keep_freed_memory())  // each round's solve reuses the last one's memory (fact/memory.h)
+    log.event("memory policy unavailable on this C library: solves may page-fault their workspace in");
   lcm::LCM lcm(options.common.lcm_url);
   if (!fact::app::lcm_opened(lcm, options.common.lcm_url, log)) return 1;
   fact::app::install_stop_handler();
