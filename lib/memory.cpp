@@ -2,7 +2,7 @@
 
 // <cstdlib> first: on glibc it includes <features.h>, which defines __GLIBC__. Without it the
 // test below was false on every platform and the policy was never set (found in session 21: a
-// tight-form N = 100 solve in fact-solver still page-faulted 689 times).
+// tight-form N = 100 solve after the call still page-faulted 689 times).
 #include <cstdlib>
 
 #if defined(__GLIBC__)

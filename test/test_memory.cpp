@@ -16,7 +16,7 @@ namespace {
 TEST(KeepFreedMemory, LargeBlocksComeFromTheHeapAndStayThere) {
 #if defined(__GLIBC__)
   ASSERT_TRUE(fact::keep_freed_memory());
-  constexpr std::size_t kBlock = 16 << 20;  // above glibc's default (and dynamic) mapping threshold
+  constexpr std::size_t kBlock = 16 << 20;  // far above glibc's default mapping threshold (128 KiB)
   const struct mallinfo2 before = mallinfo2();
   void* block = std::malloc(kBlock);
   ASSERT_NE(block, nullptr);
