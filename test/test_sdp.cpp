@@ -558,6 +558,114 @@ TEST(SdpStatus, UncoupledD1BlocksAreCertifiedNotUnique) {
 }
 
 // ---------------------------------------------------------------------------------------
+// The zero optimum: C ⪰ 0 whose null space holds a feasible X (Method::null_space).
+
+// A PSD cost of rank `rank` (n × n) with a planted zero optimum: Y₀ (n × k) Gaussian with every
+// d-row block replaced by its polar factor (orthonormal rows, so Y₀ Y₀ᵀ is feasible), and
+// C = B Bᵀ with B = (I − Q Qᵀ) G, Q an orthonormal basis of Y₀'s range and G n × rank Gaussian.
+// Then C Y₀ = 0: the optimum is 0 and X = Y₀ Y₀ᵀ attains it.
+Eigen::MatrixXd planted_zero_cost(Eigen::Index n, int d, Eigen::Index k, Eigen::Index rank, unsigned seed) {
+  Eigen::MatrixXd Y0 = gaussian(n, k, seed);
+  for (Eigen::Index i = 0; i < n; i += d) {
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(Y0.middleRows(i, d), Eigen::ComputeThinU | Eigen::ComputeThinV);
+    Y0.middleRows(i, d) = svd.matrixU() * svd.matrixV().transpose();
+  }
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(Y0).householderQ() * Eigen::MatrixXd::Identity(n, k);
+  const Eigen::MatrixXd B = gaussian(n, rank, seed + 1) - Q * (Q.transpose() * gaussian(n, rank, seed + 1));
+  return B * B.transpose();
+}
+
+// What a zero optimum found on C's null space must be: certified against Λ = 0 (S = C), an
+// objective of 0 up to rounding, and a factor that C annihilates.
+void expect_zero_optimum(const Eigen::MatrixXd& C, int d, const Result& r) {
+  EXPECT_EQ(r.method_used, Method::null_space) << r.reason;
+  EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+  expect_certificate(C, d, r);
+  EXPECT_EQ(r.Lambda.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_NEAR(r.objective, 0.0, 1e-12 * C.norm());
+  EXPECT_LE((C * r.Y).norm(), 1e-10 * C.norm() * std::sqrt(static_cast<double>(C.rows())));
+  EXPECT_GT(r.nullity, d);
+}
+
+// The paper's plain relaxation with N + 1 noisy rounds has a zero optimum from N ≈ 10 on (C has
+// nullity N − 1): fact-bench-sdp's plain_noisy N = 12 and 16. Automatic mode finds it on C's null
+// space after rank-2 Newton fails, and the interior point alone reaches the same optimum.
+TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
+  for (int drones : {12, 16}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    fact::SyntheticOptions o;
+    o.drones = drones;
+    o.rounds = drones + 1;
+    o.noise = 0.05;
+    o.seed = 2000 + drones;
+    const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+    const Result r = fact::sdp::solve(C, 2);
+    expect_zero_optimum(C, 2, r);
+    EXPECT_EQ(r.rank, drones - 1);  // X = V P Vᵀ with P ≻ 0 on the (N − 1)-dimensional null space
+    Options ip;
+    ip.method = Method::interior_point;
+    const Result interior = fact::sdp::solve(C, 2, ip);
+    ASSERT_TRUE(interior.certified()) << interior.reason;
+    EXPECT_NEAR(interior.objective, r.objective, 1e-9 * C.norm());
+  }
+}
+
+// Planted zero optima for both block sizes, by the explicit method and in automatic mode: d = 2
+// on N = 4 and 6 blocks with null spaces of dimension 5 and 9 (a rank-2 factor in them would need
+// 2k − 1 ≥ 3N, so rank-2 Newton cannot end there), d = 1 on N = 10 with a null space of dimension 8.
+TEST(SdpNullSpace, PlantedZeroOptimaOfBothBlockSizesAreFound) {
+  struct Case {
+    Eigen::MatrixXd C;
+    int d;
+  };
+  for (const Case& c : {Case{planted_zero_cost(8, 2, 5, 3, 41), 2}, Case{planted_zero_cost(12, 2, 9, 3, 42), 2},
+                        Case{planted_zero_cost(10, 1, 8, 2, 43), 1}}) {
+    SCOPED_TRACE("n = " + std::to_string(c.C.rows()) + ", d = " + std::to_string(c.d));
+    Options explicit_method;
+    explicit_method.method = Method::null_space;
+    expect_zero_optimum(c.C, c.d, fact::sdp::solve(c.C, c.d, explicit_method));
+    const Result automatic = fact::sdp::solve(c.C, c.d);
+    expect_certificate(c.C, c.d, automatic);
+    EXPECT_NEAR(automatic.objective, 0.0, 1e-12 * c.C.norm());
+  }
+}
+
+// Where the null space holds no feasible X the explicit method says so and returns no point, and
+// automatic mode goes on to the interior point: a full-rank C (null space of dimension 0), an
+// indefinite C, and the plain form at N = 8 (null space of dimension 7, optimum > 0).
+TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
+  fact::SyntheticOptions o;
+  o.drones = 8;
+  o.rounds = 9;
+  o.noise = 0.05;
+  o.seed = 2008;
+  struct Case {
+    std::string label;
+    Eigen::MatrixXd C;
+    std::string reason;
+  };
+  const std::vector<Case> cases = {
+      {"full rank", random_psd(8, 44), "null space (dimension 0)"},
+      {"indefinite", random_symmetric(8, 45), "null space (dimension"},
+      {"plain N = 8", fact::paper_cost(fact::make_synthetic_rounds(o).sums), "null space (dimension 7)"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.label);
+    Options explicit_method;
+    explicit_method.method = Method::null_space;
+    const Result r = fact::sdp::solve(c.C, 2, explicit_method);
+    EXPECT_EQ(r.status, Status::not_certified);
+    EXPECT_EQ(r.method_used, Method::null_space);
+    EXPECT_EQ(r.Y.size(), 0);
+    EXPECT_NE(r.reason.find(c.reason), std::string::npos) << r.reason;
+    const Result automatic = fact::sdp::solve(c.C, 2);
+    EXPECT_NE(automatic.method_used, Method::null_space);
+    expect_certificate(c.C, 2, automatic);
+    EXPECT_GT(std::abs(automatic.objective), 1e-6 * c.C.norm());
+  }
+}
+
+// ---------------------------------------------------------------------------------------
 // Bad input.
 
 struct BadInput {
@@ -698,7 +806,7 @@ TEST(SdpDuality, CertifiedResultsHaveConsistentBoundsForEveryMethod) {
     SCOPED_TRACE(inst.label);
     const Result automatic = fact::sdp::solve(inst.C, inst.d);
     expect_certificate(inst.C, inst.d, automatic);
-    for (Method m : {Method::low_rank, Method::interior_point, Method::complex_low_rank}) {
+    for (Method m : {Method::low_rank, Method::interior_point, Method::complex_low_rank, Method::null_space}) {
       SCOPED_TRACE(fact::sdp::to_string(m));
       Options o;
       o.method = m;

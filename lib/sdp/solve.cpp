@@ -89,8 +89,9 @@ double primal_objective(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, cons
   return cert.trace_lambda + Y.cwiseProduct(SY).sum();
 }
 
+// (A candidate without a factor, from a method that found no point, is never certified.)
 bool is_certified(const Candidate& c, const Options& o) {
-  return c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol;
+  return c.Y.size() > 0 && c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol;
 }
 
 // The certificate of a factor Y (n × r, feasible) against its own multipliers Λ(Y), and the
@@ -143,6 +144,25 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
   return with_one_more_step(C, d, std::move(c), o);
+}
+
+// The zero optimum (null_space.cpp), real C only: a factor in C's null space and Λ = 0. Without
+// one, a candidate with no factor and the reason in its note.
+Candidate from_null_space(const Eigen::MatrixXd& C, int d) {
+  detail::NullSpaceOutcome out;
+  Candidate c;
+  c.method = Method::null_space;
+  const bool found = detail::zero_optimum(C, d, out);
+  c.iterations = out.steps;
+  if (!found) {
+    c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", out.null_dimension,
+                             out.steps);
+    return c;
+  }
+  c.Y = std::move(out.Y);
+  c.cert = std::move(out.certificate);
+  c.primal = primal_objective(C, c.Y, c.cert, d);
+  return c;
 }
 
 // A complex outcome on H (C = emb(H), scaled) as a candidate: factor and certificate in d = 2 terms.
@@ -364,7 +384,10 @@ void classify(Result& r, const Candidate& c, const Options& o) {
   r.nullity = nullity(c.cert, o);
   r.eig_gap = ev.size() > r.d ? ev[r.d] : 0.0;
   const std::string note = c.note.empty() ? "" : " (" + c.note + ")";
-  if (r.min_eig_S < -o.psd_tol) {
+  if (c.Y.size() == 0) {
+    r.reason = printed("%s found no primal point", to_string(c.method)) + note;
+    r.status = Status::not_certified;
+  } else if (r.min_eig_S < -o.psd_tol) {
     r.reason = printed("S = C − Λ has λ_min = %g < −%g after %d %s iterations", r.min_eig_S, o.psd_tol, r.iterations,
                        to_string(c.method)) + note;
     r.status = Status::not_certified;
@@ -405,11 +428,20 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     return r;
   }
   Candidate best;
-  const bool try_low_rank = options.method != Method::interior_point;
+  const bool try_low_rank = options.method != Method::interior_point && options.method != Method::null_space;
   if (complex_form)
     best = from_complex_low_rank(Cs, options);
   else if (try_low_rank)
     best = from_low_rank(Cs, d, options);
+  if (!complex_form && (options.method == Method::null_space ||
+                        (options.method == Method::automatic && !is_certified(best, options)))) {
+    Candidate zero = from_null_space(Cs, d);
+    zero.iterations += best.iterations;
+    if (options.method == Method::null_space || is_certified(zero, options))
+      best = std::move(zero);
+    else
+      best.iterations = zero.iterations;  // the Newton steps count
+  }
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(best, options))) {
     // Complex form: the N × N complex interior point first, the 2N × 2N real one when it does

@@ -62,6 +62,7 @@ const char* to_string(Method m) {
     case Method::low_rank: return "low_rank";
     case Method::interior_point: return "interior_point";
     case Method::complex_low_rank: return "complex_low_rank";
+    case Method::null_space: return "null_space";
   }
   return "unknown";
 }

@@ -30,12 +30,15 @@ const char* to_string(Status s);
 
 enum class Method {
   automatic,         // complex_low_rank for a complex-form C (d = 2), otherwise rank-d Riemannian
-                     // Newton; the interior point when that does not certify
+                     // Newton, then null_space; the interior point when that does not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
   interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector)
   complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
                      // Riemannian staircase on Y ∈ ℂ^{N×p}, unit rows, Newton steps in complex
                      // arithmetic; any other C is invalid_input for it
+  null_space,        // C ⪰ 0 whose null space holds a feasible X: the optimum is 0, certified by
+                     // Λ = 0 (Newton for P ⪰ 0 with X = V P Vᵀ, V a basis of null(C)); not_certified
+                     // when it finds none. Automatic mode tries it after rank d (real C only).
 };
 const char* to_string(Method m);
 

@@ -1,0 +1,188 @@
+// The zero optimum: when C ⪰ 0 and its null space holds a feasible X, the optimum is 0.
+//
+// ⟨C, X⟩ ≥ 0 for every X ⪰ 0 when C ⪰ 0, so a feasible X with C X = 0 is optimal, and Λ = 0
+// certifies it (S = C ⪰ 0, tr Λ = 0). Such X are X = V P Vᵀ with V the n × k orthonormal basis of
+// null(C) and P ⪰ 0 (k × k) meeting the block constraints, which are linear in P:
+//     A(P)_i = V_i P V_iᵀ = I_d   for every block i    (V_i: the d × k rows of block i of V),
+// N·d(d+1)/2 equations on the k(k+1)/2 entries of P. The paper's plain relaxation with N + 1
+// rounds has k = N − 1 and, from N ≈ 10 on, a zero optimum of rank N − 1; a low-rank C of rank
+// below about n/2 has one too. The interior point reaches it in 25–30 iterations (its gap falls
+// only linearly toward a zero optimum); this finds it in 1–3 Newton steps (BENCHMARKS.md,
+// session 22).
+//
+// The steps are Newton's for the analytic centre of that set (maximise log det P subject to
+// A(P) = b) from the infeasible start P = (n/k)·I (tr X = n, as for any feasible X):
+//     ΔP = P − P A*(w) P,   M w = 2 A(P) − b,   M_(ia)(jb) = tr(E_a X_ij E_b X_ji),
+// X = V P Vᵀ (n × n), E_a the symmetric d × d basis (E_a = e_x e_yᵀ + e_y e_xᵀ for x < y,
+// e_x e_xᵀ on the diagonal), A*(w) = Vᵀ blkdiag(Σ_a w_ia E_a) V. A full step meets A(P) = b up to
+// rounding, so the first full step that keeps P ≻ 0 ends it; a half step halves the residual. When
+// neither keeps P positive definite the set is taken to be empty (on 480 sweep instances every
+// zero optimum but one was found with full or half steps, in at most 6 steps; BENCHMARKS.md,
+// session 22), and the interior point runs as before.
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "internal.h"
+#include "step_length.h"
+
+namespace fact::sdp::detail {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr int kMaxSteps = 10;            // Newton steps before the set is taken to be empty
+constexpr double kFeasibleResidual = 1e-9;  // largest |X_ii − I| entry that ends the steps
+
+// One element of the symmetric d × d basis: e_x e_yᵀ + e_y e_xᵀ (x < y) or e_x e_xᵀ (x = y).
+struct BasisElement {
+  int x, y;
+};
+
+std::vector<BasisElement> symmetric_basis(int d) {
+  std::vector<BasisElement> basis;
+  for (int x = 0; x < d; ++x) basis.push_back({x, x});
+  for (int x = 0; x < d; ++x)
+    for (int y = x + 1; y < d; ++y) basis.push_back({x, y});
+  return basis;
+}
+
+// tr(e_x e_yᵀ B e_z e_wᵀ Bᵀ) = B_yz B_xw, summed over the terms of E_a = (x, y) and E_b = (z, w).
+double basis_product(const BasisElement& a, const BasisElement& b, const Eigen::Ref<const MatrixXd>& B) {
+  double sum = 0;
+  for (int ta = 0; ta < (a.x == a.y ? 1 : 2); ++ta)
+    for (int tb = 0; tb < (b.x == b.y ? 1 : 2); ++tb) {
+      const int x = ta ? a.y : a.x, y = ta ? a.x : a.y, z = tb ? b.y : b.x, w = tb ? b.x : b.y;
+      sum += B(y, z) * B(x, w);
+    }
+  return sum;
+}
+
+// ⟨E_a, B⟩ for a d × d block B.
+double basis_inner(const BasisElement& a, const Eigen::Ref<const MatrixXd>& B) {
+  return a.x == a.y ? B(a.x, a.x) : B(a.x, a.y) + B(a.y, a.x);
+}
+
+// Every matrix of one run. n = d·N rows, k null-space columns, m = N·d(d+1)/2 constraints.
+struct Workspace {
+  Workspace(Eigen::Index n, Eigen::Index k, Eigen::Index m)
+      : Y(n, k), X(n, n), DV(n, k), P(k, k), step(k, k), trial(k, k), AW(k, k), PAW(k, k), M(m, m), rhs(m), w(m) {}
+  MatrixXd Y;      // V L, L the Cholesky factor of P: X = Y Yᵀ, n × k
+  MatrixXd X;      // V P Vᵀ (lower triangle), n × n
+  MatrixXd DV;     // blkdiag(Σ_a w_ia E_a) V, n × k
+  MatrixXd P;      // the current P, k × k
+  MatrixXd step;   // ΔP, k × k
+  MatrixXd trial;  // P + t ΔP, k × k, then its Cholesky factor in the lower triangle
+  MatrixXd AW;     // A*(w) = Vᵀ DV, k × k
+  MatrixXd PAW;    // P A*(w), k × k
+  MatrixXd M;      // Newton system (lower triangle), m × m
+  VectorXd rhs, w;  // 2 A(P) − b and its solution, m
+};
+
+// Largest |X_ii − I| entry over the blocks.
+double block_residual(const MatrixXd& X, int d) {
+  double worst = 0;
+  for (Eigen::Index i = 0; i < X.rows(); i += d)
+    for (int a = 0; a < d; ++a)
+      for (int b = 0; b <= a; ++b) worst = std::max(worst, std::abs(X(i + a, i + b) - (a == b ? 1.0 : 0.0)));
+  return worst;
+}
+
+// ws.M (lower triangle) and ws.rhs at X = ws.X.
+void newton_system(const MatrixXd& X, int d, const std::vector<BasisElement>& basis, Workspace& ws) {
+  const Eigen::Index blocks = X.rows() / d, q = static_cast<Eigen::Index>(basis.size());
+  for (Eigen::Index j = 0; j < blocks; ++j)
+    for (Eigen::Index i = j; i < blocks; ++i) {
+      const auto B = X.block(d * i, d * j, d, d);  // X_ij (i ≥ j: lower triangle)
+      for (Eigen::Index a = 0; a < q; ++a)
+        for (Eigen::Index b = 0; b < q; ++b) ws.M(q * i + a, q * j + b) = basis_product(basis[a], basis[b], B);
+    }
+  for (Eigen::Index i = 0; i < blocks; ++i)
+    for (Eigen::Index a = 0; a < q; ++a) {
+      const BasisElement& e = basis[a];
+      ws.rhs[q * i + a] = 2.0 * basis_inner(e, X.block(d * i, d * i, d, d)) - (e.x == e.y ? 1.0 : 0.0);
+    }
+}
+
+// X = Y Yᵀ with Y = V L, L the Cholesky factor of P in ws.trial: the lower triangle, and the
+// diagonal blocks whole.
+void factor_and_form(const MatrixXd& V, int d, Workspace& ws) {
+  ws.Y.noalias() = V * ws.trial.triangularView<Eigen::Lower>();
+  ws.X.triangularView<Eigen::Lower>().setZero();
+  ws.X.selfadjointView<Eigen::Lower>().rankUpdate(ws.Y);
+  for (Eigen::Index i = 0; i < ws.X.rows(); i += d)
+    for (int a = 0; a < d; ++a)
+      for (int b = a + 1; b < d; ++b) ws.X(i + a, i + b) = ws.X(i + b, i + a);
+}
+
+// ws.step = ΔP = P − P A*(w) P for the solved w.
+void newton_step(const MatrixXd& V, int d, const std::vector<BasisElement>& basis, Workspace& ws) {
+  const Eigen::Index q = static_cast<Eigen::Index>(basis.size());
+  for (Eigen::Index i = 0; i < V.rows() / d; ++i) {
+    MatrixXd D = MatrixXd::Zero(d, d);  // Σ_a w_ia E_a, d × d
+    for (Eigen::Index a = 0; a < q; ++a) {
+      D(basis[a].x, basis[a].y) += ws.w[q * i + a];
+      if (basis[a].x != basis[a].y) D(basis[a].y, basis[a].x) += ws.w[q * i + a];
+    }
+    ws.DV.middleRows(d * i, d).noalias() = D * V.middleRows(d * i, d);
+  }
+  ws.AW.noalias() = V.transpose() * ws.DV;
+  ws.PAW.noalias() = ws.P * ws.AW;
+  ws.step = ws.P;
+  ws.step.noalias() -= ws.PAW * ws.P;
+  symmetrize(ws.step);
+}
+
+// P + t ΔP into ws.trial, factored in place; true when positive definite.
+bool try_step(double t, Workspace& ws) {
+  ws.trial = ws.P + t * ws.step;
+  return cholesky_in_place(ws.trial);
+}
+
+}  // namespace
+
+bool zero_optimum(const Eigen::MatrixXd& C, int d, NullSpaceOutcome& out) {
+  const Eigen::Index n = C.rows(), blocks = n / d;
+  const VectorXd eigenvalues = eigenvalues_of(C);  // ascending, n
+  const double tol = 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
+                     std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  Eigen::Index k = 0;
+  while (k < n && eigenvalues[k] <= tol) ++k;
+  out.null_dimension = static_cast<int>(k);
+  const std::vector<BasisElement> basis = symmetric_basis(d);
+  const Eigen::Index m = blocks * static_cast<Eigen::Index>(basis.size());
+  if (eigenvalues[0] < -tol || k < d || k * (k + 1) / 2 < m) return false;  // C not PSD, or too few unknowns
+
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> solver(C);
+  const MatrixXd V = solver.eigenvectors().leftCols(k);  // orthonormal basis of null(C), n × k
+  Workspace ws(n, k, m);
+  ws.P = MatrixXd::Identity(k, k) * (static_cast<double>(n) / static_cast<double>(k));
+  ws.trial = ws.P;
+  if (!cholesky_in_place(ws.trial)) return false;
+  factor_and_form(V, d, ws);
+  Eigen::LLT<MatrixXd> llt(m);
+  for (out.steps = 0;; ++out.steps) {
+    if (block_residual(ws.X, d) <= kFeasibleResidual) {
+      out.Y = ws.Y;
+      if (!project_blocks(out.Y, d)) return false;
+      out.certificate.lambda = MatrixXd::Zero(n, d);  // Λ = 0: S = C
+      out.certificate.eigenvalues = eigenvalues;
+      out.certificate.trace_lambda = 0;
+      bound_from_spectrum(out.certificate);
+      return true;
+    }
+    if (out.steps == kMaxSteps) return false;
+    newton_system(ws.X, d, basis, ws);
+    llt.compute(ws.M);
+    if (llt.info() != Eigen::Success) return false;
+    ws.w = llt.solve(ws.rhs);
+    newton_step(V, d, basis, ws);
+    const double t = try_step(1.0, ws) ? 1.0 : try_step(0.5, ws) ? 0.5 : 0.0;
+    if (t == 0.0) return false;  // neither step keeps P ≻ 0: taken as no feasible P
+    ws.P += t * ws.step;
+    factor_and_form(V, d, ws);
+  }
+}
+
+}  // namespace fact::sdp::detail
