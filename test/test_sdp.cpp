@@ -646,7 +646,7 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
   };
   const std::vector<Case> cases = {
       {"full rank", random_psd(8, 44), "null space (dimension 0)"},
-      {"indefinite", random_symmetric(8, 45), "null space (dimension"},
+      {"indefinite", random_symmetric(8, 45), "not positive semidefinite"},
       {"plain N = 8", fact::paper_cost(fact::make_synthetic_rounds(o).sums), "null space (dimension 7)"},
   };
   for (const Case& c : cases) {

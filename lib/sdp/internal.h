@@ -262,16 +262,26 @@ Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
 // Largest factor rank the staircase needs: the Pataki bound for N·d(d+1)/2 constraints.
 int pataki_rank(int blocks, int d);
 
-// The zero optimum (null_space.cpp): a factor Y (n × k, every block of Y Yᵀ = I) with C Y = 0 up
-// to rounding, and the certificate Λ = 0 (S = C, its spectrum), when C ⪰ 0 and its null space
-// holds a feasible X; false when it does not, or when Newton does not find one within its steps.
+// The zero optimum (null_space.cpp). C's spectrum and null space dimension k (its eigenvalues at
+// or below 4nε·‖C‖₂), and what the unknowns allow: a feasible X = V P Vᵀ needs C ⪰ 0 and
+// k(k+1)/2 ≥ N·d(d+1)/2; one of rank d (generically) d·k − d(d−1)/2 ≥ N·d(d+1)/2.
+struct NullSpace {
+  Eigen::VectorXd eigenvalues;    // all n eigenvalues of C, ascending
+  bool positive_semidefinite = false;  // λ_min(C) ≥ −4nε·‖C‖₂
+  int dimension = 0;              // k: eigenvalues within ±4nε·‖C‖₂
+  bool may_hold_feasible = false;
+  bool may_hold_rank_d = false;
+};
+NullSpace null_space_of(const Eigen::MatrixXd& C, int d);
+// A factor Y (n × k, every block of Y Yᵀ = I) with C Y = 0 up to rounding, and the certificate
+// Λ = 0 (S = C, its spectrum), when C's null space holds a feasible X; false when it cannot, or
+// when Newton does not find one within its steps.
 struct NullSpaceOutcome {
   Eigen::MatrixXd Y;        // n × k factor of X = V P Vᵀ, blocks projected to orthonormal rows
   Certificate certificate;  // Λ = 0: S = C, all n eigenvalues
   int steps = 0;            // Newton steps taken
-  int null_dimension = 0;   // k, C's eigenvalues at or below 4nε·‖C‖₂
 };
-bool zero_optimum(const Eigen::MatrixXd& C, int d, NullSpaceOutcome& out);
+bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSpaceOutcome& out);
 
 // The tight complex form (complex_low_rank.cpp).
 // Empty when every 2×2 block of C is exactly [[a, −b], [b, a]], so that C is the real

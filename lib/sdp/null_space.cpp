@@ -142,17 +142,28 @@ bool try_step(double t, Workspace& ws) {
 
 }  // namespace
 
-bool zero_optimum(const Eigen::MatrixXd& C, int d, NullSpaceOutcome& out) {
-  const Eigen::Index n = C.rows(), blocks = n / d;
-  const VectorXd eigenvalues = eigenvalues_of(C);  // ascending, n
+NullSpace null_space_of(const Eigen::MatrixXd& C, int d) {
+  NullSpace null;
+  null.eigenvalues = eigenvalues_of(C);
+  const Eigen::VectorXd& eigenvalues = null.eigenvalues;
+  const Eigen::Index n = C.rows();
   const double tol = 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
                      std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
-  Eigen::Index k = 0;
-  while (k < n && eigenvalues[k] <= tol) ++k;
-  out.null_dimension = static_cast<int>(k);
+  null.positive_semidefinite = eigenvalues[0] >= -tol;
+  null.dimension = static_cast<int>((eigenvalues.array().abs() <= tol).count());
+  // N·d(d+1)/2 constraints on P (k × k): k(k+1)/2 unknowns; a rank-d factor V A (A k × d) has
+  // d·k of them, less the d(d−1)/2 of its rotation.
+  const long k = null.dimension, constraints = static_cast<long>(n / d) * d * (d + 1) / 2;
+  null.may_hold_feasible = null.positive_semidefinite && k >= d && k * (k + 1) / 2 >= constraints;
+  null.may_hold_rank_d = null.may_hold_feasible && d * k - d * (d - 1) / 2 >= constraints;
+  return null;
+}
+
+bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSpaceOutcome& out) {
+  const Eigen::Index n = C.rows(), blocks = n / d, k = null.dimension;
   const std::vector<BasisElement> basis = symmetric_basis(d);
   const Eigen::Index m = blocks * static_cast<Eigen::Index>(basis.size());
-  if (eigenvalues[0] < -tol || k < d || k * (k + 1) / 2 < m) return false;  // C not PSD, or too few unknowns
+  if (!null.may_hold_feasible) return false;
 
   const Eigen::SelfAdjointEigenSolver<MatrixXd> solver(C);
   const MatrixXd V = solver.eigenvectors().leftCols(k);  // orthonormal basis of null(C), n × k
@@ -167,7 +178,7 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, NullSpaceOutcome& out) {
       out.Y = ws.Y;
       if (!project_blocks(out.Y, d)) return false;
       out.certificate.lambda = MatrixXd::Zero(n, d);  // Λ = 0: S = C
-      out.certificate.eigenvalues = eigenvalues;
+      out.certificate.eigenvalues = null.eigenvalues;
       out.certificate.trace_lambda = 0;
       bound_from_spectrum(out.certificate);
       return true;

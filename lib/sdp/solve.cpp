@@ -148,21 +148,49 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
 
 // The zero optimum (null_space.cpp), real C only: a factor in C's null space and Λ = 0. Without
 // one, a candidate with no factor and the reason in its note.
-Candidate from_null_space(const Eigen::MatrixXd& C, int d) {
+Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpace& null) {
   detail::NullSpaceOutcome out;
   Candidate c;
   c.method = Method::null_space;
-  const bool found = detail::zero_optimum(C, d, out);
+  const bool found = detail::zero_optimum(C, d, null, out);
   c.iterations = out.steps;
-  if (!found) {
-    c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", out.null_dimension,
+  if (found) {
+    c.Y = std::move(out.Y);
+    c.cert = std::move(out.certificate);
+    c.primal = primal_objective(C, c.Y, c.cert, d);
+  } else if (!null.positive_semidefinite) {
+    c.note = detail::printed("C is not positive semidefinite: λ_min = %g", null.eigenvalues[0]);
+  } else if (!null.may_hold_feasible) {
+    c.note = detail::printed("C's null space (dimension %d) is too small to hold a feasible X", null.dimension);
+  } else {
+    c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", null.dimension,
                              out.steps);
-    return c;
   }
-  c.Y = std::move(out.Y);
-  c.cert = std::move(out.certificate);
-  c.primal = primal_objective(C, c.Y, c.cert, d);
   return c;
+}
+
+// Automatic mode on a real C: rank-d Newton (from_low_rank) and the zero optimum
+// (from_null_space), the first that certifies, else the rank-d candidate (the interior point's
+// warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
+// generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
+// reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
+// there; BENCHMARKS.md, session 22).
+Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o) {
+  const detail::NullSpace null = detail::null_space_of(C, d);
+  const bool null_first = null.may_hold_feasible && !null.may_hold_rank_d;
+  Candidate zero;
+  if (null_first) {
+    zero = from_null_space(C, d, null);
+    if (is_certified(zero, o)) return zero;
+  }
+  Candidate rank_d = from_low_rank(C, d, o);
+  rank_d.iterations += zero.iterations;
+  if (is_certified(rank_d, o) || null_first || !null.may_hold_feasible) return rank_d;
+  zero = from_null_space(C, d, null);
+  zero.iterations += rank_d.iterations;
+  if (is_certified(zero, o)) return zero;
+  rank_d.iterations = zero.iterations;
+  return rank_d;
 }
 
 // A complex outcome on H (C = emb(H), scaled) as a candidate: factor and certificate in d = 2 terms.
@@ -431,17 +459,12 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   const bool try_low_rank = options.method != Method::interior_point && options.method != Method::null_space;
   if (complex_form)
     best = from_complex_low_rank(Cs, options);
+  else if (options.method == Method::automatic)
+    best = from_rank_d_or_null_space(Cs, d, options);
+  else if (options.method == Method::null_space)
+    best = from_null_space(Cs, d, detail::null_space_of(Cs, d));
   else if (try_low_rank)
     best = from_low_rank(Cs, d, options);
-  if (!complex_form && (options.method == Method::null_space ||
-                        (options.method == Method::automatic && !is_certified(best, options)))) {
-    Candidate zero = from_null_space(Cs, d);
-    zero.iterations += best.iterations;
-    if (options.method == Method::null_space || is_certified(zero, options))
-      best = std::move(zero);
-    else
-      best.iterations = zero.iterations;  // the Newton steps count
-  }
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(best, options))) {
     // Complex form: the N × N complex interior point first, the 2N × 2N real one when it does
