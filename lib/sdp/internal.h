@@ -273,6 +273,17 @@ struct NullSpace {
   bool may_hold_rank_d = false;
 };
 NullSpace null_space_of(const Eigen::MatrixXd& C, int d);
+// What a null space of dimension k leaves room for, C ⪰ 0 assumed (n rows, d × d blocks).
+struct NullSpaceRoom {
+  bool feasible = false;  // k(k+1)/2 ≥ N·d(d+1)/2
+  bool rank_d = false;    // d·k − d(d−1)/2 ≥ N·d(d+1)/2
+};
+NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d);
+// The rank of C by Cholesky with diagonal pivoting, stopped when the largest remaining diagonal
+// entry is at most 4nε times the largest of C's: O(n r²) for rank r, an estimate of n − k that
+// costs far less than the spectrum when r is small; n when a remaining entry is below −4nε·max
+// (C not PSD).
+int pivoted_rank(const Eigen::MatrixXd& C);
 // A factor Y (n × k, every block of Y Yᵀ = I) with C Y = 0 up to rounding, and the certificate
 // Λ = 0 (S = C, its spectrum), when C's null space holds a feasible X; false when it cannot, or
 // when Newton does not find one within its steps.

@@ -142,6 +142,38 @@ bool try_step(double t, Workspace& ws) {
 
 }  // namespace
 
+NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d) {
+  // N·d(d+1)/2 constraints on P (k × k): k(k+1)/2 unknowns; a rank-d factor V A (A k × d) has
+  // d·k of them, less the d(d−1)/2 of its rotation.
+  const long dim = k, constraints = static_cast<long>(n / d) * d * (d + 1) / 2;
+  NullSpaceRoom room;
+  room.feasible = dim >= d && dim * (dim + 1) / 2 >= constraints;
+  room.rank_d = room.feasible && d * dim - d * (d - 1) / 2 >= constraints;
+  return room;
+}
+
+int pivoted_rank(const Eigen::MatrixXd& C) {
+  const Eigen::Index n = C.rows();
+  VectorXd rest = C.diagonal();  // diagonal of C − L Lᵀ, n
+  const double tol = 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
+                     std::max(rest.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  MatrixXd L(n, n);  // columns 0 … r − 1 in use
+  std::vector<bool> pivoted(n, false);
+  Eigen::Index r = 0;
+  for (; r < n; ++r) {
+    Eigen::Index pivot = -1;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!pivoted[i] && (pivot < 0 || rest[i] > rest[pivot])) pivot = i;
+    if (!(rest[pivot] > tol)) break;
+    L.col(r) = C.col(pivot);
+    if (r > 0) L.col(r).noalias() -= L.leftCols(r) * L.row(pivot).head(r).transpose();
+    L.col(r) /= std::sqrt(rest[pivot]);
+    pivoted[pivot] = true;
+    for (Eigen::Index i = 0; i < n; ++i) rest[i] = pivoted[i] ? 0.0 : rest[i] - L(i, r) * L(i, r);
+  }
+  return (rest.array() < -tol).any() ? static_cast<int>(n) : static_cast<int>(r);  // not PSD: no null space
+}
+
 NullSpace null_space_of(const Eigen::MatrixXd& C, int d) {
   NullSpace null;
   null.eigenvalues = eigenvalues_of(C);
@@ -151,11 +183,9 @@ NullSpace null_space_of(const Eigen::MatrixXd& C, int d) {
                      std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
   null.positive_semidefinite = eigenvalues[0] >= -tol;
   null.dimension = static_cast<int>((eigenvalues.array().abs() <= tol).count());
-  // N·d(d+1)/2 constraints on P (k × k): k(k+1)/2 unknowns; a rank-d factor V A (A k × d) has
-  // d·k of them, less the d(d−1)/2 of its rotation.
-  const long k = null.dimension, constraints = static_cast<long>(n / d) * d * (d + 1) / 2;
-  null.may_hold_feasible = null.positive_semidefinite && k >= d && k * (k + 1) / 2 >= constraints;
-  null.may_hold_rank_d = null.may_hold_feasible && d * k - d * (d - 1) / 2 >= constraints;
+  const NullSpaceRoom room = room_in_null_space(null.dimension, n, d);
+  null.may_hold_feasible = null.positive_semidefinite && room.feasible;
+  null.may_hold_rank_d = null.positive_semidefinite && room.rank_d;
   return null;
 }
 

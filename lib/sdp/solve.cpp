@@ -174,19 +174,22 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
 // warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
 // generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
 // reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
-// there; BENCHMARKS.md, session 22).
+// there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's
+// spectrum, which the null space needs, cost a third more than the whole solve of random_lowrank
+// N = 100, which rank-d Newton certifies).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o) {
-  const detail::NullSpace null = detail::null_space_of(C, d);
-  const bool null_first = null.may_hold_feasible && !null.may_hold_rank_d;
+  const detail::NullSpaceRoom room =
+      detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
+  const bool null_first = room.feasible && !room.rank_d;
   Candidate zero;
   if (null_first) {
-    zero = from_null_space(C, d, null);
+    zero = from_null_space(C, d, detail::null_space_of(C, d));
     if (is_certified(zero, o)) return zero;
   }
   Candidate rank_d = from_low_rank(C, d, o);
   rank_d.iterations += zero.iterations;
-  if (is_certified(rank_d, o) || null_first || !null.may_hold_feasible) return rank_d;
-  zero = from_null_space(C, d, null);
+  if (is_certified(rank_d, o) || null_first || !room.feasible) return rank_d;
+  zero = from_null_space(C, d, detail::null_space_of(C, d));
   zero.iterations += rank_d.iterations;
   if (is_certified(zero, o)) return zero;
   rank_d.iterations = zero.iterations;
