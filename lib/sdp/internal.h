@@ -263,8 +263,9 @@ Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
 int pataki_rank(int blocks, int d);
 
 // The zero optimum (null_space.cpp). C's spectrum and null space dimension k (its eigenvalues at
-// or below 4nε·‖C‖₂), and what the unknowns allow: a feasible X = V P Vᵀ needs C ⪰ 0 and
-// k(k+1)/2 ≥ N·d(d+1)/2; one of rank d (generically) d·k − d(d−1)/2 ≥ N·d(d+1)/2.
+// or below 4nε·‖C‖₂), and what the unknowns allow: a feasible X = V P Vᵀ needs C ⪰ 0 and,
+// generically, k(k+1)/2 ≥ N·d(d+1)/2; one of rank d, generically, d·k − d(d−1)/2 ≥ N·d(d+1)/2.
+// The counts are only a filter: special structure (dependent constraints) can beat them.
 struct NullSpace {
   Eigen::VectorXd eigenvalues;    // all n eigenvalues of C, ascending
   bool positive_semidefinite = false;  // λ_min(C) ≥ −4nε·‖C‖₂

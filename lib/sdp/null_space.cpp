@@ -7,7 +7,7 @@
 // N·d(d+1)/2 equations on the k(k+1)/2 entries of P. The paper's plain relaxation with N + 1
 // rounds has k = N − 1 and, from N ≈ 10 on, a zero optimum of rank N − 1; a low-rank C of rank
 // below about n/2 has one too. The interior point reaches it in 25–30 iterations (its gap falls
-// only linearly toward a zero optimum); this finds it in 1–3 Newton steps (BENCHMARKS.md,
+// only linearly toward a zero optimum); this finds it in 1–6 Newton steps (1 in most) (BENCHMARKS.md,
 // session 22).
 //
 // The steps are Newton's for the analytic centre of that set (maximise log det P subject to
@@ -17,7 +17,7 @@
 // e_x e_xᵀ on the diagonal), A*(w) = Vᵀ blkdiag(Σ_a w_ia E_a) V. A full step meets A(P) = b up to
 // rounding, so the first full step that keeps P ≻ 0 ends it; a half step halves the residual. When
 // neither keeps P positive definite the set is taken to be empty (on 480 sweep instances every
-// zero optimum but one was found with full or half steps, in at most 6 steps; BENCHMARKS.md,
+// zero optimum was found with full or half steps, in at most 6 steps; BENCHMARKS.md,
 // session 22), and the interior point runs as before.
 #include <cmath>
 #include <limits>

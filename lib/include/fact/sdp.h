@@ -30,7 +30,7 @@ const char* to_string(Status s);
 
 enum class Method {
   automatic,         // complex_low_rank for a complex-form C (d = 2), otherwise rank-d Riemannian
-                     // Newton, then null_space; the interior point when that does not certify
+                     // Newton and null_space (real C); the interior point when they do not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
   interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector)
   complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
@@ -38,7 +38,8 @@ enum class Method {
                      // arithmetic; any other C is invalid_input for it
   null_space,        // C ⪰ 0 whose null space holds a feasible X: the optimum is 0, certified by
                      // Λ = 0 (Newton for P ⪰ 0 with X = V P Vᵀ, V a basis of null(C)); not_certified
-                     // when it finds none. Automatic mode tries it after rank d (real C only).
+                     // when it finds none. Automatic mode tries it on a real C, before rank-d
+                     // Newton when a rank-d X cannot fit in the null space, after it otherwise.
 };
 const char* to_string(Method m);
 
