@@ -503,17 +503,23 @@ TEST(SdpStatus, StatusOfADegenerateOptimumDoesNotDependOnThePath) {
   EXPECT_GE(by_interior_point, 5);
 }
 
+// fact-bench-sdp's plain_noisy instance: the paper's plain cost of N drones, N + 1 rounds, noise
+// 0.05, seed 2000 + N.
+Eigen::MatrixXd bench_plain_noisy_cost(int drones) {
+  fact::SyntheticOptions o;
+  o.drones = drones;
+  o.rounds = drones + 1;
+  o.noise = 0.05;
+  o.seed = 2000 + drones;
+  return fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+}
+
 // The interior point alone (no Newton polish) reaches the gap on the paper's noisy plain cost;
 // before, it stalled at a relative gap of 3e-9 (N = 5) and 1.4e-8 (N = 8).
 TEST(SdpStatus, InteriorPointAloneCertifiesTheNoisyPlainForm) {
   for (int drones : {5, 8}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
-    fact::SyntheticOptions o;
-    o.drones = drones;
-    o.rounds = drones + 1;
-    o.noise = 0.05;
-    o.seed = 2000 + drones;  // fact-bench-sdp's plain_noisy instance
-    const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+    const Eigen::MatrixXd C = bench_plain_noisy_cost(drones);
     Options options;
     options.method = Method::interior_point;
     const Result r = fact::sdp::solve(C, 2, options);
@@ -589,16 +595,12 @@ void expect_zero_optimum(const Eigen::MatrixXd& C, int d, const Result& r) {
 
 // The paper's plain relaxation with N + 1 noisy rounds has a zero optimum from N ≈ 10 on (C has
 // nullity N − 1): fact-bench-sdp's plain_noisy N = 12 and 16. Automatic mode finds it on C's null
-// space after rank-2 Newton fails, and the interior point alone reaches the same optimum.
+// space (before rank-2 Newton, which cannot end there), and the interior point alone reaches the
+// same optimum.
 TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
   for (int drones : {12, 16}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
-    fact::SyntheticOptions o;
-    o.drones = drones;
-    o.rounds = drones + 1;
-    o.noise = 0.05;
-    o.seed = 2000 + drones;
-    const Eigen::MatrixXd C = fact::paper_cost(fact::make_synthetic_rounds(o).sums);
+    const Eigen::MatrixXd C = bench_plain_noisy_cost(drones);
     const Result r = fact::sdp::solve(C, 2);
     expect_zero_optimum(C, 2, r);
     EXPECT_EQ(r.rank, drones - 1);  // X = V P Vᵀ with P ≻ 0 on the (N − 1)-dimensional null space
@@ -634,11 +636,6 @@ TEST(SdpNullSpace, PlantedZeroOptimaOfBothBlockSizesAreFound) {
 // automatic mode goes on to the interior point: a full-rank C (null space of dimension 0), an
 // indefinite C, and the plain form at N = 8 (null space of dimension 7, optimum > 0).
 TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
-  fact::SyntheticOptions o;
-  o.drones = 8;
-  o.rounds = 9;
-  o.noise = 0.05;
-  o.seed = 2008;
   struct Case {
     std::string label;
     Eigen::MatrixXd C;
@@ -647,7 +644,7 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
   const std::vector<Case> cases = {
       {"full rank", random_psd(8, 44), "null space (dimension 0)"},
       {"indefinite", random_symmetric(8, 45), "not positive semidefinite"},
-      {"plain N = 8", fact::paper_cost(fact::make_synthetic_rounds(o).sums), "null space (dimension 7)"},
+      {"plain N = 8", bench_plain_noisy_cost(8), "null space (dimension 7)"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.label);
