@@ -603,7 +603,7 @@ TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
     const Eigen::MatrixXd C = bench_plain_noisy_cost(drones);
     const Result r = fact::sdp::solve(C, 2);
     expect_zero_optimum(C, 2, r);
-    EXPECT_EQ(r.rank, drones - 1);  // X = V P Vᵀ with P ≻ 0 on the (N − 1)-dimensional null space
+    EXPECT_GT(r.rank, 2);  // out of rank-2 Newton's reach (X = V P Vᵀ, P ≻ 0: rank N − 1 here)
     Options ip;
     ip.method = Method::interior_point;
     const Result interior = fact::sdp::solve(C, 2, ip);
@@ -628,8 +628,63 @@ TEST(SdpNullSpace, PlantedZeroOptimaOfBothBlockSizesAreFound) {
     expect_zero_optimum(c.C, c.d, fact::sdp::solve(c.C, c.d, explicit_method));
     const Result automatic = fact::sdp::solve(c.C, c.d);
     expect_certificate(c.C, c.d, automatic);
+    EXPECT_EQ(automatic.method_used, Method::null_space) << automatic.reason;  // tried before rank d
     EXPECT_NEAR(automatic.objective, 0.0, 1e-12 * c.C.norm());
   }
+}
+
+// Where a rank-d factor fits in the null space automatic mode tries rank-d Newton first and the
+// null space after it: with Newton given no steps (n = 8, d = 2, null space of dimension 7, room
+// for a rank-2 factor) the zero optimum comes from the null space, and the steps of both count.
+TEST(SdpNullSpace, AfterRankDNewtonFailsAutomaticModeTriesTheNullSpace) {
+  const Eigen::MatrixXd C = planted_zero_cost(8, 2, 7, 1, 46);
+  Options no_steps;
+  no_steps.max_newton_iterations = 0;
+  no_steps.max_sweeps = 0;
+  const Result r = fact::sdp::solve(C, 2, no_steps);
+  expect_zero_optimum(C, 2, r);
+  Options null_only = no_steps;
+  null_only.method = Method::null_space;
+  const Result alone = fact::sdp::solve(C, 2, null_only);
+  expect_zero_optimum(C, 2, alone);
+  EXPECT_GE(r.iterations, alone.iterations);
+  const Result normal = fact::sdp::solve(C, 2);  // with its steps rank-2 Newton ends there itself
+  EXPECT_EQ(normal.method_used, Method::low_rank) << normal.reason;
+  EXPECT_NEAR(normal.objective, 0.0, 1e-12 * C.norm());
+}
+
+// Dependent constraints: the counts say a null space of dimension k = 2 cannot hold a feasible X
+// for N = 9 (3 unknowns in P, 9 equations), but the rows of the planted rank-2 factor take only
+// three directions, so three of the equations decide P and Newton's system is singular. The
+// explicit method still finds the zero optimum X = Y₀ Y₀ᵀ. (That optimum is unique, one P meets
+// the three equations, but S = C has nullity 2 > d = 1, so the status is certified_not_unique.)
+TEST(SdpNullSpace, DependentConstraintsDoNotStopTheExplicitMethod) {
+  Eigen::MatrixXd Y0(9, 2);  // unit rows at 0°, 50° and 110°, 4 + 3 + 2 of them: Y0ᵀ Y0 is not ∝ I
+  const double deg = std::acos(-1.0) / 180.0;
+  for (int i = 0; i < 9; ++i) {
+    const double angle = (i < 4 ? 0.0 : i < 7 ? 50.0 : 110.0) * deg;
+    Y0.row(i) << std::cos(angle), std::sin(angle);
+  }
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(Y0).householderQ() * Eigen::MatrixXd::Identity(9, 2);
+  const Eigen::MatrixXd B = gaussian(9, 9, 47) - Q * (Q.transpose() * gaussian(9, 9, 47));  // columns ⟂ Y0's
+  const Eigen::MatrixXd C = B * B.transpose();                                                 // null(C) = range(Y0)
+  Options null_only;
+  null_only.method = Method::null_space;
+  const Result r = fact::sdp::solve(C, 1, null_only);
+  expect_zero_optimum(C, 1, r);
+  EXPECT_GT(r.iterations, 0);  // P = (n/k)·I is not feasible: Newton ran on the singular system
+  EXPECT_LE((r.X() - Y0 * Y0.transpose()).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+// C = 0: every feasible X is optimal; the null space is everything and X = I is found at once.
+TEST(SdpNullSpace, ZeroCostIsSolvedAtTheIdentity) {
+  Options null_only;
+  null_only.method = Method::null_space;
+  const Result r = fact::sdp::solve(Eigen::MatrixXd::Zero(6, 6), 2, null_only);
+  EXPECT_EQ(r.status, Status::certified_not_unique) << r.reason;
+  EXPECT_EQ(r.objective, 0.0);
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_LE((r.X() - Eigen::MatrixXd::Identity(6, 6)).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 // Where the null space holds no feasible X the explicit method says so and returns no point, and
@@ -642,9 +697,9 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
     std::string reason;
   };
   const std::vector<Case> cases = {
-      {"full rank", random_psd(8, 44), "null space (dimension 0)"},
+      {"full rank", random_psd(8, 44), "null space (dimension 0) is smaller than d = 2"},
       {"indefinite", random_symmetric(8, 45), "not positive semidefinite"},
-      {"plain N = 8", bench_plain_noisy_cost(8), "null space (dimension 7)"},
+      {"plain N = 8", bench_plain_noisy_cost(8), "null space (dimension 7) gave no feasible X"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.label);
@@ -654,6 +709,7 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
     EXPECT_EQ(r.status, Status::not_certified);
     EXPECT_EQ(r.method_used, Method::null_space);
     EXPECT_EQ(r.Y.size(), 0);
+    EXPECT_TRUE(std::isnan(r.objective) && std::isnan(r.rel_gap) && std::isnan(r.min_eig_S)) << r.objective;
     EXPECT_NE(r.reason.find(c.reason), std::string::npos) << r.reason;
     const Result automatic = fact::sdp::solve(c.C, 2);
     EXPECT_NE(automatic.method_used, Method::null_space);

@@ -29,12 +29,17 @@ Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::Matrix
   return S;
 }
 
+double eigensolver_error(Eigen::Index n, double scale) {
+  return 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
+         std::max(scale, std::numeric_limits<double>::min());
+}
+
 void bound_from_spectrum(Certificate& cert) {
   cert.min_eig = cert.eigenvalues(0);
   // The eigensolver's own backward error is about n·ε·‖S‖₂; a λ_min inside it is zero.
-  const double n = static_cast<double>(cert.eigenvalues.size());
-  const double eig_error = 4.0 * n * std::numeric_limits<double>::epsilon() * cert.eigenvalues.cwiseAbs().maxCoeff();
-  cert.dual_bound = cert.trace_lambda + n * std::min(0.0, cert.min_eig + eig_error);
+  const Eigen::Index n = cert.eigenvalues.size();
+  const double eig_error = eigensolver_error(n, cert.eigenvalues.cwiseAbs().maxCoeff());
+  cert.dual_bound = cert.trace_lambda + static_cast<double>(n) * std::min(0.0, cert.min_eig + eig_error);
 }
 
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector) {

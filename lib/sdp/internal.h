@@ -36,6 +36,9 @@ void certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda,
 
 // min_eig and dual_bound of cert from its eigenvalues (all n of S) and trace_lambda.
 void bound_from_spectrum(Certificate& cert);
+// 4nε·scale: the backward error of a symmetric eigensolver on an n × n matrix of 2-norm scale (at
+// least the smallest normal double), within which an eigenvalue counts as 0.
+double eigensolver_error(Eigen::Index n, double scale);
 
 // Eigen-analysis of S for a given Λ. With want_vector, also the eigenvector of λ_min.
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector);
@@ -262,28 +265,29 @@ Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
 // Largest factor rank the staircase needs: the Pataki bound for N·d(d+1)/2 constraints.
 int pataki_rank(int blocks, int d);
 
-// The zero optimum (null_space.cpp). C's spectrum and null space dimension k (its eigenvalues at
-// or below 4nε·‖C‖₂), and what the unknowns allow: a feasible X = V P Vᵀ needs C ⪰ 0 and,
-// generically, k(k+1)/2 ≥ N·d(d+1)/2; one of rank d, generically, d·k − d(d−1)/2 ≥ N·d(d+1)/2.
-// The counts are only a filter: special structure (dependent constraints) can beat them.
+// The zero optimum (null_space.cpp). C's spectrum and its null space (the eigenvectors of the
+// eigenvalues within ±eigensolver_error of 0). A feasible X = V P Vᵀ needs C ⪰ 0 and k ≥ d.
 struct NullSpace {
   Eigen::VectorXd eigenvalues;    // all n eigenvalues of C, ascending
-  bool positive_semidefinite = false;  // λ_min(C) ≥ −4nε·‖C‖₂
-  int dimension = 0;              // k: eigenvalues within ±4nε·‖C‖₂
-  bool may_hold_feasible = false;
-  bool may_hold_rank_d = false;
+  Eigen::MatrixXd basis;          // V: orthonormal basis of null(C), n × k
+  bool positive_semidefinite = false;  // λ_min(C) ≥ −eigensolver_error
+  int dimension = 0;              // k: eigenvalues within ±eigensolver_error
 };
-NullSpace null_space_of(const Eigen::MatrixXd& C, int d);
-// What a null space of dimension k leaves room for, C ⪰ 0 assumed (n rows, d × d blocks).
+NullSpace null_space_of(const Eigen::MatrixXd& C);
+// What a null space of dimension k leaves room for, C ⪰ 0 assumed (n rows, d × d blocks),
+// generically: a feasible X = V P Vᵀ needs k(k+1)/2 ≥ N·d(d+1)/2 unknowns for the constraints,
+// one of rank d (V A, A k × d, less its rotation) d·k − d(d−1)/2. Only a filter for automatic
+// mode's order: dependent constraints can beat the counts (k = d with a feasible X in it).
 struct NullSpaceRoom {
   bool feasible = false;  // k(k+1)/2 ≥ N·d(d+1)/2
   bool rank_d = false;    // d·k − d(d−1)/2 ≥ N·d(d+1)/2
 };
 NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d);
 // The rank of C by Cholesky with diagonal pivoting, stopped when the largest remaining diagonal
-// entry is at most 4nε times the largest of C's: O(n r²) for rank r, an estimate of n − k that
-// costs far less than the spectrum when r is small; n when a remaining entry is below −4nε·max
-// (C not PSD).
+// entry is at most eigensolver_error(n, largest diagonal entry): O(n r²) for rank r, an estimate
+// of n − k that costs far less than the spectrum when r is small; n when C is seen not to be PSD
+// (a remaining diagonal entry below −tol, or a remaining off-diagonal entry above tol, which a PSD
+// remainder with a diagonal below tol cannot have).
 int pivoted_rank(const Eigen::MatrixXd& C);
 // A factor Y (n × k, every block of Y Yᵀ = I) with C Y = 0 up to rounding, and the certificate
 // Λ = 0 (S = C, its spectrum), when C's null space holds a feasible X; false when it cannot, or

@@ -31,9 +31,16 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+// A d × d block, d ≤ 2: on the stack.
+using BlockMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2, 2>;
 
 constexpr int kMaxSteps = 10;            // Newton steps before the set is taken to be empty
 constexpr double kFeasibleResidual = 1e-9;  // largest |X_ii − I| entry that ends the steps
+// Added to M's diagonal, relative to its largest diagonal entry, before it is factored: M is
+// singular when the block constraints are dependent on the face (a null space of dimension d that
+// holds a feasible X: 3 unknowns in P for 3N equations), and a w in M's null space has A*(w) = 0 on the face (M w = 0
+// means ⟨A*(w), X A*(w) X⟩ = 0), so it does not change ΔP; the shift only keeps the factor finite.
+constexpr double kSystemShift = 1e-12;
 
 // One element of the symmetric d × d basis: e_x e_yᵀ + e_y e_xᵀ (x < y) or e_x e_xᵀ (x = y).
 struct BasisElement {
@@ -80,6 +87,17 @@ struct Workspace {
   VectorXd rhs, w;  // 2 A(P) − b and its solution, m
 };
 
+// ws.w = (M + δI)⁻¹ rhs (δ = kSystemShift · max diag M), M's lower triangle factored in place;
+// false when even the shifted M does not factor.
+bool solve_newton_system(Workspace& ws) {
+  ws.M.diagonal().array() += kSystemShift * ws.M.diagonal().maxCoeff();
+  if (!cholesky_in_place(ws.M)) return false;
+  ws.w = ws.rhs;
+  ws.M.triangularView<Eigen::Lower>().solveInPlace(ws.w);
+  ws.M.triangularView<Eigen::Lower>().transpose().solveInPlace(ws.w);
+  return true;
+}
+
 // Largest |X_ii − I| entry over the blocks.
 double block_residual(const MatrixXd& X, int d) {
   double worst = 0;
@@ -120,7 +138,7 @@ void factor_and_form(const MatrixXd& V, int d, Workspace& ws) {
 void newton_step(const MatrixXd& V, int d, const std::vector<BasisElement>& basis, Workspace& ws) {
   const Eigen::Index q = static_cast<Eigen::Index>(basis.size());
   for (Eigen::Index i = 0; i < V.rows() / d; ++i) {
-    MatrixXd D = MatrixXd::Zero(d, d);  // Σ_a w_ia E_a, d × d
+    BlockMatrix D = BlockMatrix::Zero(d, d);  // Σ_a w_ia E_a, d × d
     for (Eigen::Index a = 0; a < q; ++a) {
       D(basis[a].x, basis[a].y) += ws.w[q * i + a];
       if (basis[a].x != basis[a].y) D(basis[a].y, basis[a].x) += ws.w[q * i + a];
@@ -155,8 +173,7 @@ NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d) {
 int pivoted_rank(const Eigen::MatrixXd& C) {
   const Eigen::Index n = C.rows();
   VectorXd rest = C.diagonal();  // diagonal of C − L Lᵀ, n
-  const double tol = 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
-                     std::max(rest.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  const double tol = eigensolver_error(n, rest.cwiseAbs().maxCoeff());
   MatrixXd L(n, n);  // columns 0 … r − 1 in use
   std::vector<bool> pivoted(n, false);
   Eigen::Index r = 0;
@@ -171,21 +188,26 @@ int pivoted_rank(const Eigen::MatrixXd& C) {
     pivoted[pivot] = true;
     for (Eigen::Index i = 0; i < n; ++i) rest[i] = pivoted[i] ? 0.0 : rest[i] - L(i, r) * L(i, r);
   }
-  return (rest.array() < -tol).any() ? static_cast<int>(n) : static_cast<int>(r);  // not PSD: no null space
+  const int not_psd = static_cast<int>(n);
+  if ((rest.array() < -tol).any()) return not_psd;
+  // The remainder C − L Lᵀ on the rows not pivoted: PSD with a diagonal ≤ tol only if every entry
+  // is (|a_ij| ≤ √(a_ii a_jj)); an indefinite C with a small diagonal stops early otherwise.
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = j + 1; !pivoted[j] && i < n; ++i)
+      if (!pivoted[i] && std::abs(C(i, j) - L.row(i).head(r).dot(L.row(j).head(r))) > tol) return not_psd;
+  return static_cast<int>(r);
 }
 
-NullSpace null_space_of(const Eigen::MatrixXd& C, int d) {
+NullSpace null_space_of(const Eigen::MatrixXd& C) {
   NullSpace null;
-  null.eigenvalues = eigenvalues_of(C);
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> solver(C);
+  null.eigenvalues = solver.eigenvalues();
   const Eigen::VectorXd& eigenvalues = null.eigenvalues;
   const Eigen::Index n = C.rows();
-  const double tol = 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
-                     std::max(eigenvalues.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+  const double tol = eigensolver_error(n, eigenvalues.cwiseAbs().maxCoeff());
   null.positive_semidefinite = eigenvalues[0] >= -tol;
   null.dimension = static_cast<int>((eigenvalues.array().abs() <= tol).count());
-  const NullSpaceRoom room = room_in_null_space(null.dimension, n, d);
-  null.may_hold_feasible = null.positive_semidefinite && room.feasible;
-  null.may_hold_rank_d = null.positive_semidefinite && room.rank_d;
+  null.basis = solver.eigenvectors().leftCols(null.dimension);
   return null;
 }
 
@@ -193,16 +215,14 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSp
   const Eigen::Index n = C.rows(), blocks = n / d, k = null.dimension;
   const std::vector<BasisElement> basis = symmetric_basis(d);
   const Eigen::Index m = blocks * static_cast<Eigen::Index>(basis.size());
-  if (!null.may_hold_feasible) return false;
+  if (!null.positive_semidefinite || k < d) return false;
 
-  const Eigen::SelfAdjointEigenSolver<MatrixXd> solver(C);
-  const MatrixXd V = solver.eigenvectors().leftCols(k);  // orthonormal basis of null(C), n × k
+  const MatrixXd& V = null.basis;  // orthonormal basis of null(C), n × k
   Workspace ws(n, k, m);
   ws.P = MatrixXd::Identity(k, k) * (static_cast<double>(n) / static_cast<double>(k));
   ws.trial = ws.P;
   if (!cholesky_in_place(ws.trial)) return false;
   factor_and_form(V, d, ws);
-  Eigen::LLT<MatrixXd> llt(m);
   for (out.steps = 0;; ++out.steps) {
     if (block_residual(ws.X, d) <= kFeasibleResidual) {
       out.Y = ws.Y;
@@ -215,12 +235,13 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSp
     }
     if (out.steps == kMaxSteps) return false;
     newton_system(ws.X, d, basis, ws);
-    llt.compute(ws.M);
-    if (llt.info() != Eigen::Success) return false;
-    ws.w = llt.solve(ws.rhs);
+    if (!solve_newton_system(ws)) return false;
     newton_step(V, d, basis, ws);
     const double t = try_step(1.0, ws) ? 1.0 : try_step(0.5, ws) ? 0.5 : 0.0;
-    if (t == 0.0) return false;  // neither step keeps P ≻ 0: taken as no feasible P
+    if (t == 0.0) {  // neither step keeps P ≻ 0: taken as no feasible P (the step counts)
+      ++out.steps;
+      return false;
+    }
     ws.P += t * ws.step;
     factor_and_form(V, d, ws);
   }

@@ -2,6 +2,7 @@
 // certify, and classify. Each step is a named piece in internal.h.
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -160,8 +161,8 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
     c.primal = primal_objective(C, c.Y, c.cert, d);
   } else if (!null.positive_semidefinite) {
     c.note = detail::printed("C is not positive semidefinite: λ_min = %g", null.eigenvalues[0]);
-  } else if (!null.may_hold_feasible) {
-    c.note = detail::printed("C's null space (dimension %d) is too small to hold a feasible X", null.dimension);
+  } else if (null.dimension < d) {
+    c.note = detail::printed("C's null space (dimension %d) is smaller than d = %d", null.dimension, d);
   } else {
     c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", null.dimension,
                              out.steps);
@@ -183,13 +184,13 @@ Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Optio
   const bool null_first = room.feasible && !room.rank_d;
   Candidate zero;
   if (null_first) {
-    zero = from_null_space(C, d, detail::null_space_of(C, d));
+    zero = from_null_space(C, d, detail::null_space_of(C));
     if (is_certified(zero, o)) return zero;
   }
   Candidate rank_d = from_low_rank(C, d, o);
   rank_d.iterations += zero.iterations;
   if (is_certified(rank_d, o) || null_first || !room.feasible) return rank_d;
-  zero = from_null_space(C, d, detail::null_space_of(C, d));
+  zero = from_null_space(C, d, detail::null_space_of(C));
   zero.iterations += rank_d.iterations;
   if (is_certified(zero, o)) return zero;
   rank_d.iterations = zero.iterations;
@@ -465,7 +466,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   else if (options.method == Method::automatic)
     best = from_rank_d_or_null_space(Cs, d, options);
   else if (options.method == Method::null_space)
-    best = from_null_space(Cs, d, detail::null_space_of(Cs, d));
+    best = from_null_space(Cs, d, detail::null_space_of(Cs));
   else if (try_low_rank)
     best = from_low_rank(Cs, d, options);
   if (options.method == Method::interior_point ||
@@ -503,7 +504,12 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.min_eig_S = best.cert.min_eig;
   r.rank = rank;
   r.iterations = best.iterations;
+  if (best.Y.size() == 0) {  // no primal point (an explicit method that found none): no figures either
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    r.objective = r.dual_bound = r.rel_gap = r.min_eig_S = nan;
+  }
   classify(r, best, options);
+  if (best.Y.size() == 0) r.eig_gap = std::numeric_limits<double>::quiet_NaN();
   r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

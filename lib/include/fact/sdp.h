@@ -74,6 +74,8 @@ struct Result {
   int rank = 0;              // numerical rank of X
   int iterations = 0;        // sweeps (low rank) or Newton steps (interior point)
   double time_ms = 0;        // wall time of the whole solve, certification included
+  // When no primal point was found (an explicit method that reports why, status not_certified),
+  // Y and Lambda are empty and objective, dual_bound, rel_gap, min_eig_S and eig_gap are NaN.
   double scale = 1;          // ‖C‖_F used to scale the problem
 
   bool certified() const {
