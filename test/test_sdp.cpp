@@ -612,6 +612,29 @@ TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
   }
 }
 
+// For d = 2 and n ≤ 8 automatic mode climbs the real staircase past rank 2 before the interior
+// point: the plain form at N = 3 and 4 and a full-rank random C at N = 4 have optima of rank 3,
+// which the staircase certifies itself, at the interior point's objective.
+TEST(SdpStaircase, SmallRealProblemsClimbPastRankTwo) {
+  struct Case {
+    std::string label;
+    Eigen::MatrixXd C;
+  };
+  for (const Case& c : {Case{"plain N = 3", bench_plain_noisy_cost(3)}, Case{"plain N = 4", bench_plain_noisy_cost(4)},
+                        Case{"full rank N = 4", random_psd(8, 48)}}) {
+    SCOPED_TRACE(c.label);
+    const Result r = fact::sdp::solve(c.C, 2);
+    expect_certificate(c.C, 2, r);
+    EXPECT_EQ(r.method_used, Method::low_rank) << r.reason;
+    EXPECT_GT(r.rank, 2);
+    Options ip;
+    ip.method = Method::interior_point;
+    const Result interior = fact::sdp::solve(c.C, 2, ip);
+    ASSERT_TRUE(interior.certified()) << interior.reason;
+    EXPECT_NEAR(r.objective, interior.objective, 1e-8 * std::max(1.0, std::abs(interior.objective)));
+  }
+}
+
 // Planted zero optima for both block sizes, by the explicit method and in automatic mode: d = 2
 // on N = 4 and 6 blocks with null spaces of dimension 5 and 9 (a rank-2 factor in them would need
 // 2k − 1 ≥ 3N, so rank-2 Newton cannot end there), d = 1 on N = 10 with a null space of dimension 8.

@@ -62,6 +62,16 @@ constexpr int kComplexHandoffSteps = 10;
 // (BENCHMARKS.md, session 17). Real: 2–4 fewer iterations to the hand-off on plain_noisy
 // N = 5 … 16, mix 0.5 … 0.8 alike (session 19).
 constexpr double kInteriorStartMix = 0.65;
+// Automatic mode on a real C with d = 2 and at most this many rows climbs the whole Riemannian
+// staircase (rank 2, 3, … to the Pataki bound) before the interior point, instead of rank 2 alone:
+// at N = 3 and 4 a Newton step on a factor of rank ≤ 4 costs less than an interior-point
+// iteration and the climb certifies the high-rank optima of the plain form and of random C.
+// Sweep (12 seeds; the plain cost at noise 0.01 / 0.05 / 0.1, random C of rank 1 … N + 1 and of full
+// rank; time summed, staircase against rank 2 then interior point): N = 3 0.59 / 0.52 / 0.59,
+// N = 4 0.96 / 0.58 / 0.44 (plain / low rank / full rank); at N = 5 the plain form took 1.9× as
+// long (its optimum, of rank 4, needs 45 staircase steps), at N = 6 3.1× (BENCHMARKS.md, session 23).
+// All 300 instances (N = 2 … 6) were certified on both paths, with the same statuses.
+constexpr Eigen::Index kStaircaseMaxRows = 8;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -135,10 +145,11 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // In automatic mode the low-rank path only tries rank d (the tight case, where Newton has
 // converged within 10 steps on every benchmark instance) for at most 25 steps; a problem
 // that does not certify there goes to the interior point, which measures faster than
-// climbing the staircase on high-rank optima.
+// climbing the staircase on high-rank optima. Below kStaircaseMaxRows rows (d = 2) it climbs
+// the whole staircase instead, 25 Newton steps a level.
 Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   if (o.method == Method::automatic) {
-    o.max_rank = d;
+    if (!(d == 2 && C.rows() <= kStaircaseMaxRows)) o.max_rank = d;
     o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
   }
   detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o);
@@ -170,9 +181,9 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
   return c;
 }
 
-// Automatic mode on a real C: rank-d Newton (from_low_rank) and the zero optimum
-// (from_null_space), the first that certifies, else the rank-d candidate (the interior point's
-// warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
+// Automatic mode on a real C: rank-d Newton (from_low_rank; the staircase for n ≤
+// kStaircaseMaxRows) and the zero optimum (from_null_space), the first that certifies, else the
+// rank-d candidate (the interior point's warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
 // generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
 // reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
 // there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's

@@ -30,7 +30,8 @@ const char* to_string(Status s);
 
 enum class Method {
   automatic,         // complex_low_rank for a complex-form C (d = 2), otherwise rank-d Riemannian
-                     // Newton and null_space (real C); the interior point when they do not certify
+                     // Newton (the whole staircase for d = 2 and n ≤ 8) and null_space (real C);
+                     // the interior point when they do not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
   interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector)
   complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
