@@ -51,6 +51,17 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
     a = 1;
   }
   if (r == d) return;
+  // d = 2, r = 3 (the small real staircase's usual top level): N_i is the unit normal of Y_i's two
+  // orthonormal rows, their cross product; the QR below cost a quarter of plain_noisy N = 3 and 4
+  // (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
+  if (d == 2 && r == 3) {
+    const Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
+    for (Eigen::Index k = 0; k < d; ++k, ++a) {
+      ws.basis.block(row, r * a, d, r).setZero();
+      ws.basis.block(row + k, r * a, 1, r) = normal.transpose();
+    }
+    return;
+  }
   ws.qr.compute(Y.middleRows(row, d).transpose());  // r × d
   ws.Q = ws.qr.householderQ();
   for (Eigen::Index k = 0; k < d; ++k)
