@@ -9,6 +9,7 @@
 // which has t = d·r − d(d+1)/2 directions. The Newton system (H + μI) η = −g is N·t square.
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "internal.h"
 #include "step_length.h"
@@ -35,9 +36,37 @@ struct NewtonWorkspace {
   Eigen::VectorXd eta;      // Newton step coefficients, N·t
   Eigen::MatrixXd next;     // trial factor, n × r
   Eigen::MatrixXd next_CY;  // C · next, n × r
-  Eigen::MatrixXd Q;        // r × r orthogonal factor of the QR of Y_iᵀ
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
+  Eigen::MatrixXd Q;        // r × r: Y_i's rows as columns, then N_i (complement_of_rows)
 };
+
+// N_i into the columns d … r − 1 of ws.Q (r × r): an orthonormal basis of the complement of Y_i's
+// d orthonormal rows (Y_i = Y.middleRows(row, d), r > d), by Gram–Schmidt of the unit vectors e_k
+// against those rows and the columns kept so far, each time the e_k with the largest remainder.
+// What is left of the complement has dimension c and the remainders' squared norms sum to c over
+// the r − kept candidates, so the one taken has norm ≥ 1/√r; one re-orthogonalisation pass keeps
+// it orthogonal to rounding. Eigen's Householder QR with the formed Q did the same 3–6 % slower at
+// r = 4 and 5 (plain_noisy N = 5, 8; random_fullrank N = 6, 7; BENCHMARKS.md, session 23).
+void complement_of_rows(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWorkspace& ws) {
+  const Eigen::Index r = Y.cols();
+  auto Q = ws.Q.leftCols(r);  // columns 0 … d − 1: Y_i's rows; d … r − 1: N_i
+  for (int a = 0; a < d; ++a) Q.col(a) = Y.row(row + a).transpose();
+  std::vector<bool> used(static_cast<std::size_t>(r), false);
+  for (Eigen::Index kept = d; kept < r; ++kept) {
+    Eigen::Index best = -1;
+    double best_norm = -1;
+    for (Eigen::Index k = 0; k < r; ++k) {
+      if (used[static_cast<std::size_t>(k)]) continue;
+      const double remainder = 1.0 - Q.row(k).head(kept).squaredNorm();  // ‖e_k − Q Qᵀ e_k‖²
+      if (remainder > best_norm) best_norm = remainder, best = k;
+    }
+    used[static_cast<std::size_t>(best)] = true;
+    auto q = Q.col(kept);
+    q = -Q.leftCols(kept) * Q.row(best).head(kept).transpose();
+    q[best] += 1.0;
+    q -= Q.leftCols(kept) * (Q.leftCols(kept).transpose() * q);
+    q.normalize();
+  }
+}
 
 // Orthonormal basis of the tangent space at block Y_i = Y.middleRows(row, d) into ws.basis:
 // for d = 2 first Ω Y_i (Ω skew, unit Frobenius norm), then for r > d the matrices with one
@@ -52,18 +81,14 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
   }
   if (r == d) return;
   // d = 2, r = 3 (the small real staircase's usual top level): N_i is the unit normal of Y_i's two
-  // orthonormal rows, their cross product; the QR below cost a quarter of plain_noisy N = 3 and 4
-  // (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
+  // orthonormal rows, their cross product; the QR it replaces cost a quarter of plain_noisy N = 3
+  // and 4 (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
   if (d == 2 && r == 3) {
     const Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
-    for (Eigen::Index k = 0; k < d; ++k, ++a) {
-      ws.basis.block(row, r * a, d, r).setZero();
-      ws.basis.block(row + k, r * a, 1, r) = normal.transpose();
-    }
-    return;
+    for (int k = 0; k < 3; ++k) ws.Q(k, 2) = normal[k];
+  } else {
+    complement_of_rows(Y, row, d, ws);
   }
-  ws.qr.compute(Y.middleRows(row, d).transpose());  // r × d
-  ws.Q = ws.qr.householderQ();
   for (Eigen::Index k = 0; k < d; ++k)
     for (Eigen::Index b = d; b < r; ++b, ++a) {
       ws.basis.block(row, r * a, d, r).setZero();
