@@ -97,17 +97,18 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
 }
 
 // Λ = SymBlockDiag(C Y Yᵀ) from ws.CY, then S = C − blkdiag(Λ) and S Y = C Y − blkdiag(Λ) Y.
-void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, NewtonWorkspace& ws) {
-  for (Eigen::Index i = 0; i < C.rows(); i += d) {
-    const Eigen::MatrixXd::ConstRowsBlockXpr Yi = Y.middleRows(i, d);
-    auto lambda = ws.lambda.middleRows(i, d);
-    lambda.noalias() = ws.CY.middleRows(i, d) * Yi.transpose();
-    for (int a = 0; a < d; ++a)
-      for (int b = a + 1; b < d; ++b) lambda(a, b) = lambda(b, a) = 0.5 * (lambda(a, b) + lambda(b, a));
-    ws.SY.middleRows(i, d) = ws.CY.middleRows(i, d);
-    ws.SY.middleRows(i, d).noalias() -= lambda * Yi;
+// D = d as a compile-time size: the d × d products are fixed-size kernels.
+template <int D>
+void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, NewtonWorkspace& ws) {
+  for (Eigen::Index i = 0; i < C.rows(); i += D) {
+    const auto Yi = Y.middleRows<D>(i);  // D × r
+    Eigen::Matrix<double, D, D> lambda = ws.CY.middleRows<D>(i) * Yi.transpose();
+    lambda = (0.5 * (lambda + lambda.transpose())).eval();
+    ws.lambda.middleRows<D>(i) = lambda;
+    ws.SY.middleRows<D>(i) = ws.CY.middleRows<D>(i);
+    ws.SY.middleRows<D>(i).noalias() -= lambda * Yi;
   }
-  certificate_matrix(C, ws.lambda, d, ws.S);
+  certificate_matrix(C, ws.lambda, D, ws.S);
 }
 
 // H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the D × t matrices Bc_i (column c of
@@ -179,7 +180,10 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
   const double noise = 100.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * C.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    certificate_at(C, Y, d, ws);
+    if (d == 1)
+      certificate_at<1>(C, Y, ws);
+    else
+      certificate_at<2>(C, Y, ws);
     for (int i = 0; i < blocks; ++i) tangent_basis(Y, i * d, d, ws);
     for (int i = 0; i < blocks; ++i)  // gradient coefficients 2⟨B_ia, (S Y)_i⟩
       for (int a = 0; a < t; ++a)
