@@ -48,7 +48,7 @@ struct Workspace {
   MatrixXcd Lz_inv;                      // Lz⁻¹ (lower triangular)
   MatrixXcd W;                           // Z⁻¹
   MatrixXd M;                            // Schur complement, N × N real
-  Eigen::LLT<MatrixXd> chol_m;
+  SpdSolver chol_m;  // the Schur complement M (N × N real) factored
   MatrixXcd P;                           // scratch product, multiplied by Z⁻¹ (primal_direction)
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
@@ -203,13 +203,12 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     invert_lower_factor(ws.chol_z.L, ws.Lz_inv);   // lower triangular, zeros above
     gram_of_lower_factor(ws.Lz_inv, ws.W);          // Z⁻¹ = Lz⁻ᴴ Lz⁻¹
     ws.M = (X.array() * ws.W.array().conjugate()).real();
-    ws.chol_m.compute(ws.M);
-    if (ws.chol_m.info() != Eigen::Success) {
+    if (!ws.chol_m.factor(ws.M)) {
       out.reason = "complex Schur complement not positive definite at iteration " + std::to_string(it);
       break;
     }
     // Predictor (σ = 0): M Δy = A(X) = 1; ΔX = −X − X ΔZ W with X ΔZ = −X diag(Δy).
-    ws.dy_aff = ws.chol_m.solve(ws.ones);
+    ws.chol_m.solve(ws.ones, ws.dy_aff);
     ws.P.noalias() = -X * ws.dy_aff.asDiagonal();
     primal_direction(X, 0.0, accurate, ws, ws.dx_aff);
     const double ap_aff = primal_step(X, ws.dx_aff, ws, 1.0);
@@ -222,7 +221,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
       const double pw_ii = ws.P.row(i).transpose().cwiseProduct(ws.W.col(i)).sum().real();  // Re (P W)_ii
       ws.rhs[i] = pw_ii - (sigma * mu * ws.W(i, i).real() - X(i, i).real());
     }
-    ws.dy = ws.chol_m.solve(ws.rhs);
+    ws.chol_m.solve(ws.rhs, ws.dy);
     ws.P.noalias() -= X * ws.dy.asDiagonal();  // + X ΔZ
     primal_direction(X, sigma * mu, accurate, ws, ws.dx);
     const double ap = primal_step(X, ws.dx, ws, tau);

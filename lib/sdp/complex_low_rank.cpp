@@ -49,7 +49,7 @@ struct RankOneWorkspace {
   VectorXd mu;               // μ_i = Re((H z)_i conj(z_i)), N
   MatrixXcd S;               // H − diag(μ), N × N
   MatrixXd Hm;               // Hessian 2 Re(S_ij conj(b_i) b_j), N × N (the lower triangle is read)
-  Eigen::LLT<MatrixXd> llt;  // factor of Hm + damping·I
+  SpdSolver llt;             // factor of Hm + damping·I
   VectorXd g;                // gradient coefficients 2 Re(conj(b_i) (S z)_i), N
   VectorXd eta;              // Newton step coefficients, N
 };
@@ -154,7 +154,7 @@ struct SchurWorkspace {
   MatrixXcd W;               // (S + λI)⁻¹
   MatrixXcd X;               // Y Yᴴ
   MatrixXd M;                // Schur complement Re(W_ij conj(X_ij)), N × N real
-  Eigen::LLT<MatrixXd> llt;  // its factor
+  SpdSolver llt;             // its factor
   VectorXd mu, r, nu;        // multipliers, Schur right-hand side, row multipliers of the step (N)
 };
 
@@ -177,12 +177,11 @@ Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) 
   invert_lower_factor(ws.L, ws.L_inv);
   gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᴴ L⁻¹
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
-  ws.llt.compute(ws.M);
-  if (ws.llt.info() != Eigen::Success) return Trial::schur_not_definite;
+  if (!ws.llt.factor(ws.M)) return Trial::schur_not_definite;
   ws.WY.noalias() = ws.W * Y;
   ws.r = VectorXd::Ones(N) - lambda * (Y.array().conjugate() * ws.WY.array()).real().rowwise().sum().matrix();
-  ws.nu = -ws.llt.solve(ws.r);
-  ws.nu = lambda - ws.nu.array();  // λ − ν
+  ws.llt.solve(ws.r, ws.nu);                // −ν = M⁻¹ r
+  ws.nu = lambda + ws.nu.array();            // λ − ν
   ws.next.noalias() = ws.W * (ws.nu.asDiagonal() * Y);
   ws.next.rowwise().normalize();
   return Trial::formed;

@@ -84,7 +84,7 @@ struct Workspace {
         dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
   Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n), large n
   Eigen::MatrixXd Lx, Lz;                      // the same factors for small n (cholesky_lower, n × n)
-  Eigen::LLT<Eigen::MatrixXd> chol_m;          // the Schur complement's factorisation (m × m)
+  SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
   Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
   Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
   Eigen::MatrixXd M;                           // Schur complement (m × m)
@@ -186,13 +186,12 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     gram_of_lower_factor(ws.Lz_inv, ws.W);               // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
     if (exact_steps) invert_lower_factor(Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
-    ws.chol_m.compute(ws.M);
-    if (ws.chol_m.info() != Eigen::Success) {
+    if (!ws.chol_m.factor(ws.M)) {
       out.reason = "Schur complement not positive definite at iteration " + std::to_string(it);
       break;
     }
     // Predictor (σ = 0): T = −X, M Δy = A(X) = b; ΔX = −X − X ΔZ W.
-    ws.dy_aff = ws.chol_m.solve(b);
+    ws.chol_m.solve(b, ws.dy_aff);
     lambda_from_y(ws.dy_aff, entries, d, ws.dz_aff);
     ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
     times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
@@ -210,7 +209,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
       const double t_uv = sigma * mu * ws.W(u, v) - X(u, v);
       ws.rhs[p] -= u == v ? t_uv : 2.0 * t_uv;  // rhs = −A(T)
     }
-    ws.dy = ws.chol_m.solve(ws.rhs);
+    ws.chol_m.solve(ws.rhs, ws.dy);
     lambda_from_y(ws.dy, entries, d, ws.dz);
     ws.dz = -ws.dz;
     // ΔX = σμW − X − (ΔX_a ΔZ_a + X ΔZ) W: one n × n product with W.

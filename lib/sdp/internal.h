@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fact/sdp.h"
+#include "spd_solver.h"
 
 namespace fact::sdp::detail {
 
@@ -57,14 +58,15 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
 // exceeds f + noise, at most 12 times. Returns the accepted trial cost, or NaN when no try was
 // accepted; after an accepted step damping becomes 10·max(1e-12, μ/100), i.e. 10× lower.
 template <class Trial>
-double damped_newton_step(Eigen::MatrixXd& H, Eigen::LLT<Eigen::MatrixXd>& llt, const Eigen::VectorXd& g,
+double damped_newton_step(Eigen::MatrixXd& H, SpdSolver& llt, const Eigen::VectorXd& g,
                           Eigen::VectorXd& eta, double& damping, double f, double noise, Trial trial) {
   for (int tries = 0; tries < 12; ++tries, damping *= 10) {
     H.diagonal().array() += damping;  // shifted in place: the factorisation copies H + μI
-    llt.compute(H);
+    const bool definite = llt.factor(H);
     H.diagonal().array() -= damping;
-    if (llt.info() != Eigen::Success) continue;  // H + μI not positive definite: more damping
-    eta = llt.solve(-g);
+    if (!definite) continue;  // H + μI not positive definite: more damping
+    llt.solve(g, eta);
+    eta = -eta;
     const double f_next = trial(eta);
     if (f_next <= f + noise) {  // near the optimum the decrease is below rounding: accept
       damping = 10 * std::max(1e-12, damping / 100);

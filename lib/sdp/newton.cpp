@@ -32,7 +32,7 @@ struct NewtonWorkspace {
   Eigen::MatrixXd SB;       // S times the block-diagonal matrix of the Bc blocks, n × N·t
   Eigen::VectorXd g;        // gradient coefficients, N·t
   Eigen::MatrixXd H;        // Hessian in the tangent bases, N·t × N·t
-  Eigen::LLT<Eigen::MatrixXd> llt;  // factor of H + μI (its own N·t × N·t copy; blocked, unlike LDLT)
+  SpdSolver llt;            // factor of H + μI (its own N·t × N·t copy)
   Eigen::VectorXd eta;      // Newton step coefficients, N·t
   Eigen::MatrixXd next;     // trial factor, n × r
   Eigen::MatrixXd next_CY;  // C · next, n × r

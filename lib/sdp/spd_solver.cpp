@@ -1,0 +1,39 @@
+// SpdSolver (see spd_solver.h).
+#include "spd_solver.h"
+
+#include "step_length.h"
+
+namespace fact::sdp::detail {
+
+bool SpdSolver::factor(const Eigen::MatrixXd& A) {
+  small_ = A.rows() <= kSmallSpdSize;
+  if (!small_) {
+    llt_.compute(A);
+    return llt_.info() == Eigen::Success;
+  }
+  L_.resize(A.rows(), A.cols());
+  return cholesky_lower(A, L_);
+}
+
+void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (!small_) {
+    x = llt_.solve(b);
+    return;
+  }
+  const Eigen::Index n = L_.rows();
+  if (&x != &b) x = b;
+  for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L
+    const double* l = &L_(0, k);
+    x[k] /= l[k];
+    const double xk = x[k];
+    for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
+  }
+  for (Eigen::Index k = n - 1; k >= 0; --k) {  // Lᵀ x = y, by rows of Lᵀ (columns of L)
+    const double* l = &L_(0, k);
+    double sum = x[k];
+    for (Eigen::Index i = k + 1; i < n; ++i) sum -= l[i] * x[i];
+    x[k] = sum / l[k];
+  }
+}
+
+}  // namespace fact::sdp::detail

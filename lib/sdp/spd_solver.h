@@ -1,0 +1,28 @@
+// Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle
+// read). Below kSmallSpdSize plain loops (cholesky_lower and two substitutions); above it Eigen's
+// blocked LLT. At the Newton systems' and Schur complements' usual sizes (6 … 48 unknowns)
+// Eigen::LLT also computed a condition estimate nothing reads and dispatched its triangular
+// solves: 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3 (BENCHMARKS.md, session 23).
+#pragma once
+
+#include <Eigen/Dense>
+
+namespace fact::sdp::detail {
+
+constexpr Eigen::Index kSmallSpdSize = 64;
+
+class SpdSolver {
+ public:
+  explicit SpdSolver(Eigen::Index n = 0) : L_(n, n), llt_(n) {}
+  // False when A is not positive definite (nothing usable is then kept).
+  bool factor(const Eigen::MatrixXd& A);
+  // x = A⁻¹ b for the last A factored; x may alias b.
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+
+ private:
+  bool small_ = true;
+  Eigen::MatrixXd L_;              // the factor on the small path, lower triangle, n × n
+  Eigen::LLT<Eigen::MatrixXd> llt_;  // the large path
+};
+
+}  // namespace fact::sdp::detail
