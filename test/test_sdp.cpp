@@ -603,7 +603,7 @@ TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
     const Eigen::MatrixXd C = bench_plain_noisy_cost(drones);
     const Result r = fact::sdp::solve(C, 2);
     expect_zero_optimum(C, 2, r);
-    EXPECT_GT(r.rank, 2);  // out of rank-2 Newton's reach (X = V P Vᵀ, P ≻ 0: rank N − 1 here)
+    EXPECT_EQ(r.rank, drones - 1);  // X = V P Vᵀ with P ≻ 0 on the (N − 1)-dimensional null space
     Options ip;
     ip.method = Method::interior_point;
     const Result interior = fact::sdp::solve(C, 2, ip);
@@ -657,20 +657,22 @@ TEST(SdpNullSpace, PlantedZeroOptimaOfBothBlockSizesAreFound) {
 }
 
 // Where a rank-d factor fits in the null space automatic mode tries rank-d Newton first and the
-// null space after it: with Newton given no steps (n = 8, d = 2, null space of dimension 7, room
-// for a rank-2 factor) the zero optimum comes from the null space, and the steps of both count.
+// null space after it: with Newton given too few steps to end there (n = 12, d = 2, null space of
+// dimension 10, room for a rank-2 factor: 2k − 1 ≥ 3N) the zero optimum comes from the null space,
+// and the steps of both count.
 TEST(SdpNullSpace, AfterRankDNewtonFailsAutomaticModeTriesTheNullSpace) {
-  const Eigen::MatrixXd C = planted_zero_cost(8, 2, 7, 1, 46);
-  Options no_steps;
-  no_steps.max_newton_iterations = 0;
-  no_steps.max_sweeps = 0;
-  const Result r = fact::sdp::solve(C, 2, no_steps);
+  const Eigen::MatrixXd C = planted_zero_cost(12, 2, 10, 2, 46);
+  constexpr int kNewtonSteps = 2;
+  Options few_steps;
+  few_steps.max_newton_iterations = kNewtonSteps;
+  few_steps.max_sweeps = 0;
+  const Result r = fact::sdp::solve(C, 2, few_steps);
   expect_zero_optimum(C, 2, r);
-  Options null_only = no_steps;
+  Options null_only = few_steps;
   null_only.method = Method::null_space;
   const Result alone = fact::sdp::solve(C, 2, null_only);
   expect_zero_optimum(C, 2, alone);
-  EXPECT_GE(r.iterations, alone.iterations);
+  EXPECT_EQ(r.iterations, alone.iterations + kNewtonSteps);  // rank-2 Newton's steps count too
   const Result normal = fact::sdp::solve(C, 2);  // with its steps rank-2 Newton ends there itself
   EXPECT_EQ(normal.method_used, Method::low_rank) << normal.reason;
   EXPECT_NEAR(normal.objective, 0.0, 1e-12 * C.norm());
@@ -732,7 +734,10 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
     EXPECT_EQ(r.status, Status::not_certified);
     EXPECT_EQ(r.method_used, Method::null_space);
     EXPECT_EQ(r.Y.size(), 0);
-    EXPECT_TRUE(std::isnan(r.objective) && std::isnan(r.rel_gap) && std::isnan(r.min_eig_S)) << r.objective;
+    EXPECT_TRUE(std::isnan(r.objective) && std::isnan(r.dual_bound) && std::isnan(r.rel_gap) &&
+                std::isnan(r.min_eig_S) && std::isnan(r.eig_gap))
+        << r.objective;
+    EXPECT_EQ(r.Lambda.size(), 0);
     EXPECT_NE(r.reason.find(c.reason), std::string::npos) << r.reason;
     const Result automatic = fact::sdp::solve(c.C, 2);
     EXPECT_NE(automatic.method_used, Method::null_space);

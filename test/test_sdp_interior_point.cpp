@@ -236,4 +236,44 @@ TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
   }
 }
 
+// SpdSolver on both of its paths (plain loops to 64 rows, Eigen's LLT above, and back): x = A⁻¹ b
+// for A = B Bᵀ + n I, with x aliasing b; false and a NaN solution for an indefinite A.
+TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  fact::sdp::detail::SpdSolver solver(3);
+  for (int n : {1, 10, 64, 65, 100, 7}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+    const Eigen::VectorXd b = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 1, rng, gauss);
+    ASSERT_TRUE(solver.factor(A));
+    Eigen::VectorXd x = b;
+    solver.solve(x, x);  // aliased
+    EXPECT_LT((A * x - b).cwiseAbs().maxCoeff(), 1e-12 * b.cwiseAbs().maxCoeff() * n);
+    const Eigen::MatrixXd indefinite = A - 2.0 * A.diagonal().maxCoeff() * Eigen::MatrixXd::Identity(n, n);
+    EXPECT_FALSE(solver.factor(indefinite));
+    solver.solve(b, x);
+    EXPECT_TRUE(x.array().isNaN().all());
+  }
+}
+
+// pivoted_rank: the rank of a PSD C = B Bᵀ (B n × r), and n (no null space) for an indefinite C,
+// including one whose diagonal is 0 (blocks [[0, 1], [1, 0]]), which stops the pivoting at once.
+TEST(SdpKernels, PivotedRankCountsPsdRankAndSeesIndefiniteMatrices) {
+  std::mt19937 rng(19);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int r : {0, 1, 3, 9}) {
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(12, std::max(r, 1), rng, gauss);
+    const Eigen::MatrixXd C = r == 0 ? Eigen::MatrixXd::Zero(12, 12) : Eigen::MatrixXd(B * B.transpose());
+    EXPECT_EQ(fact::sdp::detail::pivoted_rank(C), r);
+  }
+  Eigen::MatrixXd swap = Eigen::MatrixXd::Zero(8, 8);
+  for (int i = 0; i < 8; i += 2) swap(i, i + 1) = swap(i + 1, i) = 1.0;
+  EXPECT_EQ(fact::sdp::detail::pivoted_rank(swap), 8);
+  Eigen::MatrixXd mixed = Eigen::MatrixXd::Identity(8, 8);
+  mixed(7, 7) = -1.0;
+  EXPECT_EQ(fact::sdp::detail::pivoted_rank(mixed), 8);
+}
+
 }  // namespace

@@ -286,10 +286,10 @@ struct NullSpaceRoom {
 };
 NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d);
 // The rank of C by Cholesky with diagonal pivoting, stopped when the largest remaining diagonal
-// entry is at most eigensolver_error(n, largest diagonal entry): O(n r²) for rank r, an estimate
-// of n − k that costs far less than the spectrum when r is small; n when C is seen not to be PSD
-// (a remaining diagonal entry below −tol, or a remaining off-diagonal entry above tol, which a PSD
-// remainder with a diagonal below tol cannot have).
+// entry is at most eigensolver_error(n, largest diagonal entry): O(n r² + (n − r)² r) for rank
+// r, an estimate of n − k that costs far less than the spectrum when r is small; n when C is seen
+// not to be PSD (a remaining diagonal entry below −tol, or a remaining off-diagonal entry above
+// tol, which a PSD remainder with a diagonal below tol cannot have).
 int pivoted_rank(const Eigen::MatrixXd& C);
 // A factor Y (n × k, every block of Y Yᵀ = I) with C Y = 0 up to rounding, and the certificate
 // Λ = 0 (S = C, its spectrum), when C's null space holds a feasible X; false when it cannot, or

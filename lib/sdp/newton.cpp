@@ -7,6 +7,7 @@
 // Both are written in an orthonormal basis of each block's tangent space,
 //   T_i = { Ω Y_i + A N_iᵀ : Ω skew d×d, A d×(r−d) },  N_i r×(r−d) with Y_i N_i = 0,
 // which has t = d·r − d(d+1)/2 directions. The Newton system (H + μI) η = −g is N·t square.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -59,6 +60,8 @@ void complement_of_rows(const Eigen::MatrixXd& Y, Eigen::Index row, int d, Newto
       const double remainder = 1.0 - Q.row(k).head(kept).squaredNorm();  // ‖e_k − Q Qᵀ e_k‖²
       if (remainder > best_norm) best_norm = remainder, best = k;
     }
+    if (best < 0)  // every remainder NaN (a non-finite Y): take the first unused, keep the write in bounds
+      best = std::find(used.begin(), used.end(), false) - used.begin();
     used[static_cast<std::size_t>(best)] = true;
     auto q = Q.col(kept);
     q = -Q.leftCols(kept) * Q.row(best).head(kept).transpose();
@@ -84,8 +87,14 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
   // orthonormal rows, their cross product; the QR it replaces cost a quarter of plain_noisy N = 3
   // and 4 (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
   if (d == 2 && r == 3) {
-    const Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
-    for (int k = 0; k < 3; ++k) ws.Q(k, 2) = normal[k];
+    Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
+    const double norm = normal.norm();  // 1 for exactly orthonormal rows; 0 for a zero block
+    if (norm > 0.5) {
+      normal /= norm;
+      for (int k = 0; k < 3; ++k) ws.Q(k, 2) = normal[k];
+    } else {
+      complement_of_rows(Y, row, d, ws);
+    }
   } else {
     complement_of_rows(Y, row, d, ws);
   }

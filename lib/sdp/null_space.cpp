@@ -19,6 +19,7 @@
 // neither keeps P positive definite the set is taken to be empty (on 480 sweep instances every
 // zero optimum was found with full or half steps, in at most 6 steps; BENCHMARKS.md,
 // session 22), and the interior point runs as before.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -87,10 +88,11 @@ struct Workspace {
   VectorXd rhs, w;  // 2 A(P) − b and its solution, m
 };
 
-// ws.w = (M + δI)⁻¹ rhs (δ = kSystemShift · max diag M), M's lower triangle factored in place;
-// false when even the shifted M does not factor.
+// ws.w = (M + δI)⁻¹ rhs, δ = max(kSystemShift, m·ε) · max diag M (above Cholesky's own rounding
+// for any m), M's lower triangle factored in place; false when even the shifted M does not factor.
 bool solve_newton_system(Workspace& ws) {
-  ws.M.diagonal().array() += kSystemShift * ws.M.diagonal().maxCoeff();
+  const double relative = std::max(kSystemShift, static_cast<double>(ws.M.rows()) * std::numeric_limits<double>::epsilon());
+  ws.M.diagonal().array() += relative * ws.M.diagonal().maxCoeff();
   if (!cholesky_in_place(ws.M)) return false;
   ws.w = ws.rhs;
   ws.M.triangularView<Eigen::Lower>().solveInPlace(ws.w);
@@ -207,7 +209,8 @@ NullSpace null_space_of(const Eigen::MatrixXd& C) {
   const double tol = eigensolver_error(n, eigenvalues.cwiseAbs().maxCoeff());
   null.positive_semidefinite = eigenvalues[0] >= -tol;
   null.dimension = static_cast<int>((eigenvalues.array().abs() <= tol).count());
-  null.basis = solver.eigenvectors().leftCols(null.dimension);
+  const Eigen::Index negative = (eigenvalues.array() < -tol).count();  // ascending: they come first
+  null.basis = solver.eigenvectors().middleCols(negative, null.dimension);
   return null;
 }
 
@@ -235,10 +238,13 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSp
     }
     if (out.steps == kMaxSteps) return false;
     newton_system(ws.X, d, basis, ws);
-    if (!solve_newton_system(ws)) return false;
+    if (!solve_newton_system(ws)) {  // (a step that fails counts, as one neither of whose lengths fits)
+      ++out.steps;
+      return false;
+    }
     newton_step(V, d, basis, ws);
     const double t = try_step(1.0, ws) ? 1.0 : try_step(0.5, ws) ? 0.5 : 0.0;
-    if (t == 0.0) {  // neither step keeps P ≻ 0: taken as no feasible P (the step counts)
+    if (t == 0.0) {  // neither step keeps P ≻ 0: taken as no feasible P
       ++out.steps;
       return false;
     }

@@ -145,7 +145,7 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // In automatic mode the low-rank path only tries rank d (the tight case, where Newton has
 // converged within 10 steps on every benchmark instance) for at most 25 steps; a problem
 // that does not certify there goes to the interior point, which measures faster than
-// climbing the staircase on high-rank optima. Below kStaircaseMaxRows rows (d = 2) it climbs
+// climbing the staircase on high-rank optima. Up to kStaircaseMaxRows rows (d = 2) it climbs
 // the whole staircase instead, 25 Newton steps a level.
 Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
   if (o.method == Method::automatic) {
@@ -181,9 +181,9 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
   return c;
 }
 
-// Automatic mode on a real C: rank-d Newton (from_low_rank; the staircase for n ≤
-// kStaircaseMaxRows) and the zero optimum (from_null_space), the first that certifies, else the
-// rank-d candidate (the interior point's warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
+// Automatic mode on a real C: rank-d Newton (from_low_rank; the whole staircase for d = 2 and
+// n ≤ kStaircaseMaxRows) and the zero optimum (from_null_space), the first that certifies, else
+// the low-rank candidate (the interior point's warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
 // generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
 // reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
 // there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's

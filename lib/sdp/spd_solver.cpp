@@ -1,21 +1,36 @@
 // SpdSolver (see spd_solver.h).
 #include "spd_solver.h"
 
+#include <limits>
+
 #include "step_length.h"
 
 namespace fact::sdp::detail {
+
+SpdSolver::SpdSolver(Eigen::Index n) {
+  if (n <= kSmallSpdSize)
+    L_.resize(n, n);
+  else
+    llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
+}
 
 bool SpdSolver::factor(const Eigen::MatrixXd& A) {
   small_ = A.rows() <= kSmallSpdSize;
   if (!small_) {
     llt_.compute(A);
-    return llt_.info() == Eigen::Success;
+    factored_ = llt_.info() == Eigen::Success;
+  } else {
+    L_.resize(A.rows(), A.cols());
+    factored_ = cholesky_lower(A, L_);
   }
-  L_.resize(A.rows(), A.cols());
-  return cholesky_lower(A, L_);
+  return factored_;
 }
 
 void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (!factored_) {
+    x.setConstant(b.size(), std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
   if (!small_) {
     x = llt_.solve(b);
     return;

@@ -1,5 +1,5 @@
 // Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle
-// read). Below kSmallSpdSize plain loops (cholesky_lower and two substitutions); above it Eigen's
+// read). Up to kSmallSpdSize rows plain loops (cholesky_lower and two substitutions); above it Eigen's
 // blocked LLT. At the Newton systems' and Schur complements' usual sizes (6 … 48 unknowns)
 // Eigen::LLT also computed a condition estimate nothing reads and dispatched its triangular
 // solves: 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3 (BENCHMARKS.md, session 23).
@@ -13,14 +13,16 @@ constexpr Eigen::Index kSmallSpdSize = 64;
 
 class SpdSolver {
  public:
-  explicit SpdSolver(Eigen::Index n = 0) : L_(n, n), llt_(n) {}
-  // False when A is not positive definite (nothing usable is then kept).
+  // Storage for the path an n × n system takes (the other is allocated if a later A needs it).
+  explicit SpdSolver(Eigen::Index n = 0);
+  // False when A is not positive definite.
   bool factor(const Eigen::MatrixXd& A);
-  // x = A⁻¹ b for the last A factored; x may alias b.
+  // x = A⁻¹ b for the last A factored; x may alias b. NaN when that factorisation failed.
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
 
  private:
   bool small_ = true;
+  bool factored_ = false;
   Eigen::MatrixXd L_;              // the factor on the small path, lower triangle, n × n
   Eigen::LLT<Eigen::MatrixXd> llt_;  // the large path
 };
