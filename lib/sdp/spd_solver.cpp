@@ -22,6 +22,7 @@ bool SpdSolver::factor(const Eigen::MatrixXd& A) {
   } else {
     L_.resize(A.rows(), A.cols());
     factored_ = cholesky_lower(A, L_);
+    if (factored_) inverse_diagonal_ = L_.diagonal().cwiseInverse();  // the substitutions multiply
   }
   return factored_;
 }
@@ -39,15 +40,15 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   if (&x != &b) x = b;
   for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L
     const double* l = &L_(0, k);
-    x[k] /= l[k];
-    const double xk = x[k];
+    const double xk = x[k] * inverse_diagonal_[k];
+    x[k] = xk;
     for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
   }
   for (Eigen::Index k = n - 1; k >= 0; --k) {  // Lᵀ x = y, by rows of Lᵀ (columns of L)
     const double* l = &L_(0, k);
     double sum = x[k];
     for (Eigen::Index i = k + 1; i < n; ++i) sum -= l[i] * x[i];
-    x[k] = sum / l[k];
+    x[k] = sum * inverse_diagonal_[k];
   }
 }
 
