@@ -23,9 +23,9 @@ class SpdSolver {
  private:
   bool small_ = true;
   bool factored_ = false;
-  Eigen::MatrixXd L_;              // the factor on the small path, lower triangle, n × n
+  Eigen::MatrixXd L_;                 // the factor on the small path, lower triangle, n × n
   Eigen::VectorXd inverse_diagonal_;  // 1 / L_ii on the small path, n
-  Eigen::LLT<Eigen::MatrixXd> llt_;  // the large path
+  Eigen::LLT<Eigen::MatrixXd> llt_;   // the large path
 };
 
 }  // namespace fact::sdp::detail
