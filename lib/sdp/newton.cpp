@@ -71,6 +71,18 @@ void complement_of_rows(const Eigen::MatrixXd& Y, Eigen::Index row, int d, Newto
   }
 }
 
+// N_i for d = 2, r = 3 (the small real staircase's usual top level) into column 2 of ws.Q: the unit
+// normal of Y_i's two orthonormal rows, their cross product; the QR it replaces cost a quarter of
+// plain_noisy N = 3 and 4 (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
+// False for a degenerate block (the product's norm, 1 for orthonormal rows, below 0.5).
+bool normal_of_rows(const Eigen::MatrixXd& Y, Eigen::Index row, NewtonWorkspace& ws) {
+  const Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
+  const double norm = normal.norm();
+  if (!(norm > 0.5)) return false;
+  for (int k = 0; k < 3; ++k) ws.Q(k, 2) = normal[k] / norm;
+  return true;
+}
+
 // Orthonormal basis of the tangent space at block Y_i = Y.middleRows(row, d) into ws.basis:
 // for d = 2 first Ω Y_i (Ω skew, unit Frobenius norm), then for r > d the matrices with one
 // row equal to a column of N_iᵀ (N_i: r × (r − d), orthonormal, Y_i N_i = 0).
@@ -83,21 +95,7 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
     a = 1;
   }
   if (r == d) return;
-  // d = 2, r = 3 (the small real staircase's usual top level): N_i is the unit normal of Y_i's two
-  // orthonormal rows, their cross product; the QR it replaces cost a quarter of plain_noisy N = 3
-  // and 4 (0.053 → 0.038 and 0.046 → 0.035 ms a solve; BENCHMARKS.md, session 23).
-  if (d == 2 && r == 3) {
-    Eigen::Vector3d normal = Y.row(row).transpose().head<3>().cross(Y.row(row + 1).transpose().head<3>());
-    const double norm = normal.norm();  // 1 for exactly orthonormal rows; 0 for a zero block
-    if (norm > 0.5) {
-      normal /= norm;
-      for (int k = 0; k < 3; ++k) ws.Q(k, 2) = normal[k];
-    } else {
-      complement_of_rows(Y, row, d, ws);
-    }
-  } else {
-    complement_of_rows(Y, row, d, ws);
-  }
+  if (!(d == 2 && r == 3 && normal_of_rows(Y, row, ws))) complement_of_rows(Y, row, d, ws);
   for (Eigen::Index k = 0; k < d; ++k)
     for (Eigen::Index b = d; b < r; ++b, ++a) {
       ws.basis.block(row, r * a, d, r).setZero();

@@ -39,8 +39,9 @@ constexpr int kMaxSteps = 10;            // Newton steps before the set is taken
 constexpr double kFeasibleResidual = 1e-9;  // largest |X_ii − I| entry that ends the steps
 // Added to M's diagonal, relative to its largest diagonal entry, before it is factored: M is
 // singular when the block constraints are dependent on the face (a null space of dimension d that
-// holds a feasible X: 3 unknowns in P for 3N equations), and a w in M's null space has A*(w) = 0 on the face (M w = 0
-// means ⟨A*(w), X A*(w) X⟩ = 0), so it does not change ΔP; the shift only keeps the factor finite.
+// holds a feasible X: 3 unknowns in P for 3N equations), and a w in M's null space has A*(w) = 0
+// on the face (M w = 0 means ⟨A*(w), X A*(w) X⟩ = 0), so it does not change ΔP; the shift only
+// keeps the factor finite.
 constexpr double kSystemShift = 1e-12;
 
 // One element of the symmetric d × d basis: e_x e_yᵀ + e_y e_xᵀ (x < y) or e_x e_xᵀ (x = y).
@@ -75,7 +76,8 @@ double basis_inner(const BasisElement& a, const Eigen::Ref<const MatrixXd>& B) {
 // Every matrix of one run. n = d·N rows, k null-space columns, m = N·d(d+1)/2 constraints.
 struct Workspace {
   Workspace(Eigen::Index n, Eigen::Index k, Eigen::Index m)
-      : Y(n, k), X(n, n), DV(n, k), P(k, k), step(k, k), trial(k, k), AW(k, k), PAW(k, k), M(m, m), rhs(m), w(m) {}
+      : Y(n, k), X(n, n), DV(n, k), P(k, k), step(k, k), trial(k, k), AW(k, k), PAW(k, k), M(m, m), system(m),
+        rhs(m), w(m) {}
   MatrixXd Y;      // V L, L the Cholesky factor of P: X = Y Yᵀ, n × k
   MatrixXd X;      // V P Vᵀ (lower triangle), n × n
   MatrixXd DV;     // blkdiag(Σ_a w_ia E_a) V, n × k
@@ -85,18 +87,18 @@ struct Workspace {
   MatrixXd AW;     // A*(w) = Vᵀ DV, k × k
   MatrixXd PAW;    // P A*(w), k × k
   MatrixXd M;      // Newton system (lower triangle), m × m
+  SpdSolver system;  // M + δI factored
   VectorXd rhs, w;  // 2 A(P) − b and its solution, m
 };
 
 // ws.w = (M + δI)⁻¹ rhs, δ = max(kSystemShift, m·ε) · max diag M (above Cholesky's own rounding
-// for any m), M's lower triangle factored in place; false when even the shifted M does not factor.
+// for any m); false when even the shifted M does not factor.
 bool solve_newton_system(Workspace& ws) {
-  const double relative = std::max(kSystemShift, static_cast<double>(ws.M.rows()) * std::numeric_limits<double>::epsilon());
+  const double relative =
+      std::max(kSystemShift, static_cast<double>(ws.M.rows()) * std::numeric_limits<double>::epsilon());
   ws.M.diagonal().array() += relative * ws.M.diagonal().maxCoeff();
-  if (!cholesky_in_place(ws.M)) return false;
-  ws.w = ws.rhs;
-  ws.M.triangularView<Eigen::Lower>().solveInPlace(ws.w);
-  ws.M.triangularView<Eigen::Lower>().transpose().solveInPlace(ws.w);
+  if (!ws.system.factor(ws.M)) return false;
+  ws.system.solve(ws.rhs, ws.w);
   return true;
 }
 

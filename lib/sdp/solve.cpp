@@ -515,12 +515,11 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.min_eig_S = best.cert.min_eig;
   r.rank = rank;
   r.iterations = best.iterations;
-  if (best.Y.size() == 0) {  // no primal point (an explicit method that found none): no figures either
+  classify(r, best, options);  // (without a primal point it reads only that)
+  if (best.Y.size() == 0) {      // no primal point (an explicit method that found none): no figures either
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    r.objective = r.dual_bound = r.rel_gap = r.min_eig_S = nan;
+    r.objective = r.dual_bound = r.rel_gap = r.min_eig_S = r.eig_gap = nan;
   }
-  classify(r, best, options);
-  if (best.Y.size() == 0) r.eig_gap = std::numeric_limits<double>::quiet_NaN();
   r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
