@@ -5,7 +5,8 @@
 // run ends, on the scaled problem (‖C‖_F = 1) the solver passes in. The complex interior point
 // (the N × N Hermitian form of a complex-form cost) is checked against the real one. The
 // triangular kernels of every iteration (L⁻¹ and Z⁻¹ = L⁻ᴴ L⁻¹ by recursive blocks) are checked
-// against dense products, across their blocking thresholds.
+// against dense products, across their blocking thresholds, and Newton's system in Schur form
+// against the one in tangent bases.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -274,6 +275,54 @@ TEST(SdpKernels, PivotedRankCountsPsdRankAndSeesIndefiniteMatrices) {
   Eigen::MatrixXd mixed = Eigen::MatrixXd::Identity(8, 8);
   mixed(7, 7) = -1.0;
   EXPECT_EQ(fact::sdp::detail::pivoted_rank(mixed), 8);
+}
+
+// Newton's system in Schur form against the one in tangent bases (newton_refine's NewtonSystem):
+// the damped system Proj(S V) + λV = −S Y is the same, so from a point near a rank-r optimum one
+// step of each lands at the same factor, and from farther out both converge to the same optimum.
+// Plain costs of N = 5 and 8 (optima of rank 4 and 5, where automatic mode takes the Schur form)
+// and a random C with d = 1 at rank 4.
+TEST(SdpNewton, SchurFormTakesTheTangentBasisStep) {
+  using fact::sdp::detail::NewtonSystem;
+  std::mt19937 rng(23);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  struct Case { Eigen::MatrixXd C; int d; };
+  Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(12, 12, rng, gauss);
+  const Eigen::MatrixXd random_psd = B * B.transpose();
+  for (const Case& c : {Case{scaled_plain_cost(5, 3), 2}, Case{scaled_plain_cost(8, 4), 2},
+                        Case{random_psd / random_psd.norm(), 1}}) {
+    fact::sdp::Options o;
+    o.method = fact::sdp::Method::interior_point;
+    const fact::sdp::Result r = fact::sdp::solve(c.C, c.d, o);
+    ASSERT_TRUE(r.certified()) << r.reason;
+    // The optimum's factor at its numerical rank, then a perturbation of size `size`, projected.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(r.X());
+    const Eigen::Index rank = r.rank;
+    ASSERT_GT(c.d * rank - c.d * (c.d + 1) / 2, c.d * (c.d + 1) / 2) << "rank " << rank << ": not the Schur form";
+    const Eigen::MatrixXd optimum = eig.eigenvectors().rightCols(rank) *
+                                    eig.eigenvalues().tail(rank).cwiseSqrt().asDiagonal();  // n × rank
+    for (double size : {1e-7, 1e-2}) {
+      SCOPED_TRACE("d = " + std::to_string(c.d) + ", rank " + std::to_string(rank) + ", perturbation " +
+                   std::to_string(size));
+      Eigen::MatrixXd start = optimum + size * fact::test::gaussian_matrix<Eigen::MatrixXd>(optimum.rows(), rank, rng, gauss);
+      ASSERT_TRUE(fact::sdp::detail::project_blocks(start, c.d));
+      Eigen::MatrixXd dense = start, schur = start;
+      const int steps = size < 1e-4 ? 1 : 60;
+      const int dense_steps = fact::sdp::detail::newton_refine(c.C, c.d, dense, steps, 1e-12, NewtonSystem::tangent_basis);
+      const int schur_steps = fact::sdp::detail::newton_refine(c.C, c.d, schur, steps, 1e-12, NewtonSystem::schur);
+      const double f_dense = (dense.transpose() * c.C * dense).trace(), f_schur = (schur.transpose() * c.C * schur).trace();
+      if (size < 1e-4) {  // one step each, from the same point: the same step
+        EXPECT_EQ(dense_steps, 1);
+        EXPECT_EQ(schur_steps, 1);
+        EXPECT_LT((dense - schur).norm(), 1e-8 * (dense - start).norm());
+      } else {  // both converge (‖grad‖ < 1e-12 before the step limit) to the optimum
+        EXPECT_LT(dense_steps, steps);
+        EXPECT_LT(schur_steps, steps);
+        EXPECT_NEAR(f_schur, f_dense, 1e-12 * std::max(1.0, std::abs(f_dense)));
+      }
+      EXPECT_NEAR(f_schur, r.objective / r.scale, 1e-9 * std::max(1e-4, std::abs(f_schur)) + 2 * size * size);
+    }
+  }
 }
 
 }  // namespace

@@ -19,11 +19,6 @@
 #include "step_length.h"
 
 namespace fact::sdp::detail {
-namespace {
-
-struct Entry {
-  int u, v;  // the (row, column) of X this constraint fixes, u ≤ v
-};
 
 std::vector<Entry> constraint_entries(int n, int d) {
   std::vector<Entry> entries;
@@ -33,7 +28,6 @@ std::vector<Entry> constraint_entries(int n, int d) {
   return entries;
 }
 
-// Λ (n × d, blocks stacked) from y; every entry of lambda is written.
 void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, int d, Eigen::MatrixXd& lambda) {
   for (std::size_t p = 0; p < entries.size(); ++p) {
     const auto [u, v] = entries[p];
@@ -42,7 +36,6 @@ void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, 
   }
 }
 
-// Schur complement M_pq = tr(A_p X A_q W), m × m, with W = Z⁻¹.
 // For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα.
 void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
                       Eigen::MatrixXd& M) {
@@ -65,6 +58,8 @@ void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const 
     }
   }
 }
+
+namespace {
 
 // A(P W) for P n × n: only the d × d diagonal blocks of P W are formed, O(n² d).
 void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,

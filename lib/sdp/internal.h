@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "fact/sdp.h"
 #include "spd_solver.h"
@@ -49,8 +50,29 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
 // Y is n × r with orthonormal-row blocks on entry and exit. Returns the sweeps done.
 int block_coordinate_sweeps(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_sweeps, double tol);
 
+// The block constraints X_ii = I_d as entries (interior_point.cpp): constraint p fixes X(u, v),
+// u ≤ v in the same d × d diagonal block, A_p = e_u e_uᵀ (u = v) or e_u e_vᵀ + e_v e_uᵀ, with
+// right-hand side 1 (u = v) or 0; m = N·d(d+1)/2 of them, block by block.
+struct Entry {
+  int u, v;  // the (row, column) of X this constraint fixes, u ≤ v
+};
+std::vector<Entry> constraint_entries(int n, int d);
+// Aᵀ(y) = blkdiag(Λ) as Λ (n × d, blocks stacked) from y (m); every entry of lambda is written.
+void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, int d, Eigen::MatrixXd& lambda);
+// M_pq = tr(A_p X A_q W) (m × m, both triangles) for symmetric X and W (n × n): the interior
+// point's Schur complement (W = Z⁻¹), and Newton's in Schur form (X = Y Yᵀ, W = (S + λI)⁻¹).
+void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
+                      Eigen::MatrixXd& M);
+
+// How newton_refine solves its Newton system (newton.cpp): automatic takes tangent_basis while the
+// t = d·r − d(d+1)/2 tangent directions of a block are at most its d(d+1)/2 normal ones (the
+// Hessian formed in tangent bases, N·t unknowns) and schur above (N·d(d+1)/2 unknowns, through
+// (S + λI)⁻¹, whatever r is). Both take the same damped steps (the tests compare them).
+enum class NewtonSystem { automatic, tangent_basis, schur };
+
 // Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol. Returns the steps taken.
-int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol);
+int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
+                  NewtonSystem system = NewtonSystem::automatic);
 
 // One Levenberg–Marquardt-damped Newton step, shared by the real and the complex Newton: H + μI
 // (H: the Hessian in tangent coordinates, restored on return) is factored with μ = damping,

@@ -4,9 +4,12 @@
 // With Λ(Y) = SymBlockDiag(C Y Yᵀ) and S = C − Λ(Y) (n × n):
 //   Riemannian gradient   grad f = 2 S Y
 //   Riemannian Hessian    Hess f[V] = Proj_Y(2 S V)
-// Both are written in an orthonormal basis of each block's tangent space,
+// With few tangent directions per block they are written in an orthonormal basis of each block's
+// tangent space,
 //   T_i = { Ω Y_i + A N_iᵀ : Ω skew d×d, A d×(r−d) },  N_i r×(r−d) with Y_i N_i = 0,
-// which has t = d·r − d(d+1)/2 directions. The Newton system (H + μI) η = −g is N·t square.
+// which has t = d·r − d(d+1)/2 directions, and the Newton system (H + μI) η = −g is N·t square
+// (dense_newton). When t exceeds the d(d+1)/2 normal directions per block the system is solved in
+// Schur form instead, N·d(d+1)/2 square whatever r is (schur_newton).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -103,19 +106,30 @@ void tangent_basis(const Eigen::MatrixXd& Y, Eigen::Index row, int d, NewtonWork
     }
 }
 
-// Λ = SymBlockDiag(C Y Yᵀ) from ws.CY, then S = C − blkdiag(Λ) and S Y = C Y − blkdiag(Λ) Y.
-// D = d as a compile-time size: the d × d products are fixed-size kernels.
+// Λ = SymBlockDiag(C Y Yᵀ) from CY = C Y (n × r) into lambda (n × d), then S = C − blkdiag(Λ)
+// (n × n) and S Y = C Y − blkdiag(Λ) Y (n × r). D = d as a compile-time size: the d × d products
+// are fixed-size kernels.
 template <int D>
-void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, NewtonWorkspace& ws) {
+void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& CY,
+                    Eigen::MatrixXd& lambda, Eigen::MatrixXd& SY, Eigen::MatrixXd& S) {
   for (Eigen::Index i = 0; i < C.rows(); i += D) {
     const auto Yi = Y.middleRows<D>(i);  // D × r
-    Eigen::Matrix<double, D, D> lambda = ws.CY.middleRows<D>(i) * Yi.transpose();
-    lambda = (0.5 * (lambda + lambda.transpose())).eval();
-    ws.lambda.middleRows<D>(i) = lambda;
-    ws.SY.middleRows<D>(i) = ws.CY.middleRows<D>(i);
-    ws.SY.middleRows<D>(i).noalias() -= lambda * Yi;
+    Eigen::Matrix<double, D, D> block = CY.middleRows<D>(i) * Yi.transpose();
+    block = (0.5 * (block + block.transpose())).eval();
+    lambda.middleRows<D>(i) = block;
+    SY.middleRows<D>(i) = CY.middleRows<D>(i);
+    SY.middleRows<D>(i).noalias() -= block * Yi;
   }
-  certificate_matrix(C, ws.lambda, D, ws.S);
+  certificate_matrix(C, lambda, D, S);
+}
+
+// certificate_at for d = 1 or 2.
+void certificate_at(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, const Eigen::MatrixXd& CY,
+                    Eigen::MatrixXd& lambda, Eigen::MatrixXd& SY, Eigen::MatrixXd& S) {
+  if (d == 1)
+    certificate_at<1>(C, Y, CY, lambda, SY, S);
+  else
+    certificate_at<2>(C, Y, CY, lambda, SY, S);
 }
 
 // H = 2 Σ_c B_cᵀ S B_c, B_c = blkdiag over blocks of the D × t matrices Bc_i (column c of
@@ -174,12 +188,10 @@ double trial_step(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, int
   return ws.next.cwiseProduct(ws.next_CY).sum();
 }
 
-}  // namespace
-
-int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol) {
+// Damped Newton with the Hessian formed in the tangent bases (N·t × N·t).
+int dense_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol) {
   const Eigen::Index n = C.rows(), r = Y.cols();
   const int blocks = static_cast<int>(n / d), t = static_cast<int>(d * r - d * (d + 1) / 2);
-  if (t == 0) return 0;
   NewtonWorkspace ws(n, d, r, blocks, t);
   double mu = 1e-8;  // Levenberg–Marquardt damping on the Newton system
   ws.CY.noalias() = C * Y;
@@ -187,10 +199,7 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
   const double noise = 100.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * C.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
-    if (d == 1)
-      certificate_at<1>(C, Y, ws);
-    else
-      certificate_at<2>(C, Y, ws);
+    certificate_at(C, Y, d, ws.CY, ws.lambda, ws.SY, ws.S);
     for (int i = 0; i < blocks; ++i) tangent_basis(Y, i * d, d, ws);
     for (int i = 0; i < blocks; ++i)  // gradient coefficients 2⟨B_ia, (S Y)_i⟩
       for (int a = 0; a < t; ++a)
@@ -208,6 +217,118 @@ int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_i
     f = f_next;
   }
   return it;
+}
+
+// Every matrix of one Newton run in Schur form, allocated once. n rows, r columns, m = N·d(d+1)/2
+// block constraints.
+struct SchurWorkspace {
+  SchurWorkspace(Eigen::Index n, int d, Eigen::Index r, int m)
+      : CY(n, r), lambda(n, d), S(n, n), X(n, n), SY(n, r), shifted(n, n), L(n, n), L_inv(n, n), W(n, n), WSY(n, r),
+        M(m, m), llt(m), rhs(m), nu(m), normal(n, d), pushed(n, r), next(n, r), next_CY(n, r) {}
+  Eigen::MatrixXd CY;        // C Y, n × r
+  Eigen::MatrixXd lambda;    // Λ(Y) = SymBlockDiag(C Y Yᵀ), d × d blocks stacked, n × d
+  Eigen::MatrixXd S;         // C − blkdiag(Λ), n × n
+  Eigen::MatrixXd X;         // Y Yᵀ, n × n
+  Eigen::MatrixXd SY;        // S Y, n × r
+  Eigen::MatrixXd shifted;   // S + λI, n × n (its lower triangle is factored)
+  Eigen::MatrixXd L, L_inv;  // S + λI = L Lᵀ (lower triangle) and L⁻¹ (zeros above), n × n
+  Eigen::MatrixXd W;         // (S + λI)⁻¹, n × n
+  Eigen::MatrixXd WSY;       // W S Y, n × r
+  Eigen::MatrixXd M;         // Schur complement tr(A_p X A_q W), m × m
+  SpdSolver llt;             // its factor
+  Eigen::VectorXd rhs, nu;   // Schur right-hand side and the multipliers ν of the step (m)
+  Eigen::MatrixXd normal;    // blkdiag(Ν) from ν, d × d blocks stacked, n × d
+  Eigen::MatrixXd pushed;    // S Y + blkdiag(Ν) Y, n × r (the step is V = −W · it)
+  Eigen::MatrixXd next, next_CY;  // trial factor and C · it, n × r
+};
+
+// One damped Newton trial in Schur form at shift λ, into ws.next (rows retracted). The damped
+// system Proj(S V) + λV = −S Y (the dense one's (H + μI) η = −g with μ = 2λ) over tangent V is
+//     (S + λI) V + blkdiag(Ν) Y = −S Y,   sym(Y_i V_iᵀ) = 0 for every block i,
+// Ν_i symmetric d × d, the multipliers of the tangency constraints (ν, one per constraint entry).
+// With W = (S + λI)⁻¹ (needs S + λI ≻ 0), V = −W (S Y + blkdiag(Ν) Y), and the constraints give
+//     M ν = −A((W S Y) Yᵀ),   M_pq = tr(A_p X A_q W),  X = Y Yᵀ,
+// (A(P)_p = ⟨A_p, P⟩ needs only P's block diagonal). Every term is of the order of S Y, the
+// gradient, so the step keeps its digits near the optimum, where W grows as 1/λ (the equivalent
+// Y + V = W blkdiag(λI − Ν) Y cancels terms of order 1 there and lost 4 of the step's digits at
+// λ = 5e-9). M is the interior point's Schur complement for X and W, positive definite when
+// S + λI is (X_ii = I); its factorisation fails only by rounding. Cost: one n × n factorisation,
+// inversion and product, and an m × m factorisation, whatever r is.
+enum class SchurTrial { formed, shift_too_small, schur_not_definite };
+SchurTrial schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vector<Entry>& entries,
+                       SchurWorkspace& ws) {
+  const Eigen::Index n = Y.rows();
+  ws.shifted = ws.S;
+  ws.shifted.diagonal().array() += lambda;
+  if (n <= kExactStepMaxSize) {
+    if (!cholesky_lower(ws.shifted, ws.L)) return SchurTrial::shift_too_small;
+  } else {
+    ws.L.swap(ws.shifted);
+    if (!cholesky_in_place(ws.L)) return SchurTrial::shift_too_small;
+  }
+  invert_lower_factor(ws.L, ws.L_inv);
+  gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᵀ L⁻¹
+  schur_complement(ws.X, ws.W, entries, ws.M);
+  if (!ws.llt.factor(ws.M)) return SchurTrial::schur_not_definite;
+  ws.WSY.noalias() = ws.W * ws.SY;
+  for (std::size_t p = 0; p < entries.size(); ++p) {  // −A((W S Y) Yᵀ)
+    const auto [u, v] = entries[p];
+    const double entry = u == v ? ws.WSY.row(u).dot(Y.row(u)) : ws.WSY.row(u).dot(Y.row(v)) + ws.WSY.row(v).dot(Y.row(u));
+    ws.rhs[static_cast<Eigen::Index>(p)] = -entry;
+  }
+  ws.llt.solve(ws.rhs, ws.nu);
+  lambda_from_y(ws.nu, entries, d, ws.normal);
+  ws.pushed = ws.SY;  // S Y + blkdiag(Ν) Y
+  for (Eigen::Index i = 0; i < n; i += d) ws.pushed.middleRows(i, d).noalias() += ws.normal.middleRows(i, d) * Y.middleRows(i, d);
+  ws.next = Y;
+  ws.next.noalias() -= ws.W * ws.pushed;  // Y + V
+  for (Eigen::Index i = 0; i < n; i += d) retract_rows(ws.next, i, d);
+  return SchurTrial::formed;
+}
+
+// Damped Newton in Schur form (schur_trial), with the dense path's damping rule: λ raised 10×
+// while S + λI is not positive definite, M does not factor or the trial raises f by more than
+// rounding, lowered 10× after an accepted step.
+int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol) {
+  const Eigen::Index n = C.rows(), r = Y.cols();
+  const std::vector<Entry> entries = constraint_entries(static_cast<int>(n), d);
+  SchurWorkspace ws(n, d, r, static_cast<int>(entries.size()));
+  ws.CY.noalias() = C * Y;
+  double f = Y.cwiseProduct(ws.CY).sum();  // ⟨C, Y Yᵀ⟩
+  const double noise = 100.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * C.norm();
+  double lambda = 0.5e-8;  // the dense path's first μ = 1e-8
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    certificate_at(C, Y, d, ws.CY, ws.lambda, ws.SY, ws.S);
+    if (2.0 * ws.SY.norm() < grad_tol) break;  // ‖grad f‖ = ‖2 S Y‖ (S Y is tangent)
+    ws.X.noalias() = Y * Y.transpose();
+    bool accepted = false;
+    for (int tries = 0; tries < 12 && !accepted; ++tries, lambda *= 10) {
+      if (schur_trial(Y, d, lambda, entries, ws) != SchurTrial::formed) continue;
+      ws.next_CY.noalias() = C * ws.next;
+      const double f_next = ws.next.cwiseProduct(ws.next_CY).sum();
+      if (!(f_next <= f + noise)) continue;
+      Y.swap(ws.next);
+      ws.CY.swap(ws.next_CY);
+      f = f_next;
+      lambda = std::max(0.5e-12, lambda / 100);  // 10× below the accepted λ after the loop's ×10
+      accepted = true;
+    }
+    if (!accepted) break;
+  }
+  return it;
+}
+
+}  // namespace
+
+int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
+                  NewtonSystem system) {
+  const int t = static_cast<int>(d * Y.cols() - d * (d + 1) / 2);  // tangent directions per block
+  if (t <= 0) return 0;
+  if (system == NewtonSystem::automatic)
+    system = t > d * (d + 1) / 2 ? NewtonSystem::schur : NewtonSystem::tangent_basis;
+  if (system == NewtonSystem::schur) return schur_newton(C, d, Y, max_iterations, grad_tol);
+  return dense_newton(C, d, Y, max_iterations, grad_tol);
 }
 
 }  // namespace fact::sdp::detail
