@@ -69,6 +69,11 @@ void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const 
 // Hessian formed in tangent bases, N·t unknowns) and schur above (N·d(d+1)/2 unknowns, through
 // (S + λI)⁻¹, whatever r is). Both take the same damped steps (the tests compare them).
 enum class NewtonSystem { automatic, tangent_basis, schur };
+// Unknowns of the system newton_refine factors in automatic mode at rank r (blocks = N): N·t in
+// tangent bases, N·d(d+1)/2 in Schur form, so N·min(t, d(d+1)/2), t = d·r − d(d+1)/2.
+inline int newton_unknowns(int blocks, int d, int r) {
+  return blocks * std::min(d * r - d * (d + 1) / 2, d * (d + 1) / 2);
+}
 
 // Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol. Returns the steps taken.
 int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,

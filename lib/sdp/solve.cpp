@@ -13,19 +13,19 @@ namespace {
 
 using detail::Certificate;
 
-// Largest Newton system the polish may factor (its cost is size³/3): beyond it the
-// interior point's own result stands.
+// Largest Newton system the polish may factor (its cost is size³/3; detail::newton_unknowns, at
+// most N·d(d+1)/2 in Schur form): beyond it the interior point's own result stands.
 constexpr int kMaxPolishSize = 2000;
 
 // The early polish (automatic mode, n ≤ kEarlyPolishMaxRows): the interior point hands its
-// iterate to Newton once the relative gap is below kHandoffGap; when the Newton system has at
-// most kEarlyPolishPerRow unknowns per row of C (a Newton step then costs about two
-// interior-point iterations), Newton gets kEarlyPolishSteps steps to certify; otherwise the
-// interior point resumes. From a gap of 1e-5 Newton certifies in 2–3 steps on most of the
-// benchmark's instances, where the interior point needs 4–6 more iterations to converge or to
-// find that rounding has stalled it (BENCHMARKS.md, session 9).
+// iterate to Newton once the relative gap is below kHandoffGap, and Newton gets kEarlyPolishSteps
+// steps to certify; otherwise the interior point resumes. From a gap of 1e-5 Newton certifies in
+// 2–3 steps on most of the benchmark's instances, where the interior point needs 4–6 more
+// iterations to converge or to find that rounding has stalled it (BENCHMARKS.md, session 9).
+// Until session 24 the polish ran only when its system had at most 4 unknowns per row of C (rank
+// ≤ 5 for d = 2); in Schur form a step costs about one interior-point iteration at any rank, and
+// polishing every rank took random full-rank C at N = 12 … 24 from 0.67 … 2.0 ms to 0.45 … 1.3 ms.
 constexpr double kHandoffGap = 1e-5;
-constexpr int kEarlyPolishPerRow = 4;
 constexpr int kEarlyPolishSteps = 3;
 constexpr int kEarlyPolishMaxRows = 48;  // above it an interior-point iteration is cheaper than the handoff's eigensolves
 
@@ -297,7 +297,7 @@ Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPo
 // largest, at most the Pataki bound.
 struct PolishSize {
   int rank = 0;
-  int unknowns = 0;  // of the Newton system: blocks · (d·rank − d(d+1)/2)
+  int unknowns = 0;  // of the Newton system newton_refine factors (detail::newton_unknowns)
 };
 PolishSize polish_size(const Eigen::MatrixXd& Y, int d) {
   const Eigen::VectorXd eigenvalues = Y.colwise().squaredNorm().transpose();
@@ -307,7 +307,7 @@ PolishSize polish_size(const Eigen::MatrixXd& Y, int d) {
   while (size.rank < eigenvalues.size() && size.rank < max_rank &&
          eigenvalues[size.rank] > 1e-6 * eigenvalues.maxCoeff())
     ++size.rank;
-  size.unknowns = blocks * (d * size.rank - d * (d + 1) / 2);
+  size.unknowns = detail::newton_unknowns(blocks, d, size.rank);
   return size;
 }
 
@@ -337,9 +337,8 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // finds no dual shift or the warm run stalls); above, the warm start measured 0 … +20 % slower
 // (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
 // near the end and restarted cold). In automatic mode, for n ≤ kEarlyPolishMaxRows, it hands off
-// at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps when that polish's system
-// is small (kEarlyPolishPerRow unknowns per row), and resumes where it stopped when the polish
-// does not certify.
+// at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
+// stopped when the polish does not certify.
 Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form,
                               const Candidate* warm = nullptr) {
   const int n = static_cast<int>(C.rows());
@@ -365,7 +364,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
     handed.Y = detail::factor_psd(ip.X, 0.0);
     handed.iterations = ip.iterations;
     handed.method = Method::interior_point;
-    polished = polish(C, d, handed, kEarlyPolishPerRow * n, kEarlyPolishSteps, o);
+    polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, o);
   }
   if (polished && is_certified(*polished, o)) return *polished;
   detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
