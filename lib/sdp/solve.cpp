@@ -17,7 +17,7 @@ using detail::Certificate;
 // most N·d(d+1)/2 in Schur form): beyond it the interior point's own result stands.
 constexpr int kMaxPolishSize = 2000;
 
-// The early polish (automatic mode, n ≤ kEarlyPolishMaxRows): the interior point hands its
+// The early polish (automatic mode): the interior point hands its
 // iterate to Newton once the relative gap is below kHandoffGap, and Newton gets kEarlyPolishSteps
 // steps to certify; otherwise the interior point resumes. From a gap of 1e-5 Newton certifies in
 // 2–3 steps on most of the benchmark's instances, where the interior point needs 4–6 more
@@ -25,9 +25,15 @@ constexpr int kMaxPolishSize = 2000;
 // Until session 24 the polish ran only when its system had at most 4 unknowns per row of C (rank
 // ≤ 5 for d = 2); in Schur form a step costs about one interior-point iteration at any rank, and
 // polishing every rank took random full-rank C at N = 12 … 24 from 0.67 … 2.0 ms to 0.45 … 1.3 ms.
+// It also ran only up to n = 48, where an interior-point iteration had been cheaper than the
+// hand-off's eigensolves and the dense Newton system; in Schur form the hand-off at every size
+// took random full-rank C N = 32 / 48 / 64 / 100 / 200 to 0.70 / 0.69 / 0.71 / 0.67 / 0.70 of the
+// time and the paper's cost with 2N rounds N = 32 / 48 / 64 to 0.60 / 0.78 / 0.64, with the same
+// statuses (BENCHMARKS.md, session 24).
 constexpr double kHandoffGap = 1e-5;
 constexpr int kEarlyPolishSteps = 3;
-constexpr int kEarlyPolishMaxRows = 48;  // above it an interior-point iteration is cheaper than the handoff's eigensolves
+// The real interior point starts from the rank-d attempt's factor up to this many rows (below).
+constexpr int kWarmStartMaxRows = 48;
 
 // The complex staircase in automatic mode climbs while the next rank's Newton system has at most
 // this many unknowns (N·(2p − 1)); beyond it the interior point, handed to complex Newton at a gap
@@ -56,7 +62,7 @@ constexpr int kComplexHandoffSteps = 10;
 // In automatic mode the interior points start from the low-rank path's last factor Y,
 // X = (1 − mix) Y Yᴴ + mix·I with mix = kInteriorStartMix, instead of X = I: the complex one from
 // the staircase's factor, the real one (not on the complex form) from the rank-d attempt's for
-// n ≤ kEarlyPolishMaxRows. Complex, tight sweeps (8 seeds, interleaved in one process), mix 0.5
+// n ≤ kWarmStartMaxRows. Complex, tight sweeps (8 seeds, interleaved in one process), mix 0.5
 // against X = I: −27 % time at N = 32, −2 % at 64, −6 % at 100 (noise 0.05), −10 % and −39 % at
 // N = 32 and 64 with noise 0.01; 0.65 against 0.5: +1.5 %, −4 %, −10 % at N = 32, 64, 100
 // (BENCHMARKS.md, session 17). Real: 2–4 fewer iterations to the hand-off on plain_noisy
@@ -332,20 +338,20 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   return with_one_more_step(C, d, std::move(c), o);
 }
 
-// The interior point. For n ≤ kEarlyPolishMaxRows it starts from the rank-d attempt's factor and
+// The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
 // multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
 // finds no dual shift or the warm run stalls); above, the warm start measured 0 … +20 % slower
 // (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
-// near the end and restarted cold). In automatic mode, for n ≤ kEarlyPolishMaxRows, it hands off
-// at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
+// near the end and restarted cold; with the hand-off at every size, session 24: random full rank
+// N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
+// off at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
 // stopped when the polish does not certify.
 Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form,
                               const Candidate* warm = nullptr) {
   const int n = static_cast<int>(C.rows());
-  const bool early = o.method == Method::automatic && (n <= kEarlyPolishMaxRows || complex_form);
-  const double handoff = early ? kHandoffGap : 0.0;
+  const double handoff = o.method == Method::automatic ? kHandoffGap : 0.0;
   detail::InteriorPointOutcome start;
-  const bool warm_start = n <= kEarlyPolishMaxRows && warm && warm->Y.cols() >= d &&
+  const bool warm_start = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d &&
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
   detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, handoff, warm_start ? &start : nullptr);
