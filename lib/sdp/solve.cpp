@@ -17,19 +17,18 @@ using detail::Certificate;
 // most N·d(d+1)/2 in Schur form): beyond it the interior point's own result stands.
 constexpr int kMaxPolishSize = 2000;
 
-// The early polish (automatic mode): the interior point hands its
-// iterate to Newton once the relative gap is below kHandoffGap, and Newton gets kEarlyPolishSteps
-// steps to certify; otherwise the interior point resumes. From a gap of 1e-5 Newton certifies in
-// 2–3 steps on most of the benchmark's instances, where the interior point needs 4–6 more
-// iterations to converge or to find that rounding has stalled it (BENCHMARKS.md, session 9).
-// Until session 24 the polish ran only when its system had at most 4 unknowns per row of C (rank
-// ≤ 5 for d = 2); in Schur form a step costs about one interior-point iteration at any rank, and
-// polishing every rank took random full-rank C at N = 12 … 24 from 0.67 … 2.0 ms to 0.45 … 1.3 ms.
-// It also ran only up to n = 48, where an interior-point iteration had been cheaper than the
-// hand-off's eigensolves and the dense Newton system; in Schur form the hand-off at every size
-// took random full-rank C N = 32 / 48 / 64 / 100 / 200 to 0.70 / 0.69 / 0.71 / 0.67 / 0.70 of the
-// time and the paper's cost with 2N rounds N = 32 / 48 / 64 to 0.60 / 0.78 / 0.64, with the same
-// statuses (BENCHMARKS.md, session 24).
+// The early polish (automatic mode): the interior point hands its iterate to Newton once the
+// relative gap is below kHandoffGap, and Newton gets kEarlyPolishSteps steps to certify; otherwise
+// the interior point resumes. From a gap of 1e-5 Newton certifies in 2–3 steps on most of the
+// benchmark's instances, where the interior point needs 4–6 more iterations to converge or to
+// find that rounding has stalled it (BENCHMARKS.md, session 9). Until session 24 the polish ran
+// only when its system had at most 4 unknowns per row of C (rank ≤ 5 for d = 2), and only up to
+// n = 48, where an interior-point iteration had been cheaper than the hand-off's eigensolves and
+// the dense Newton system. In Schur form a step costs about one interior-point iteration at any
+// rank: polishing every rank took random full-rank C at N = 12 … 24 from 0.67 … 2.0 ms to
+// 0.45 … 1.3 ms, and the hand-off at every size took random full-rank C at N = 32 / 48 / 64 to
+// 0.69 / 0.70 / 0.69 of the time (N = 100 / 200: 36.6 → 25.9 ms, 217 → 156 ms) and the paper's
+// cost with 2N rounds to 0.73 / 0.87 / 0.73, with the same statuses (BENCHMARKS.md, session 24).
 constexpr double kHandoffGap = 1e-5;
 constexpr int kEarlyPolishSteps = 3;
 // The real interior point starts from the rank-d attempt's factor up to this many rows (below).
