@@ -908,4 +908,92 @@ TEST(SdpDuality, CertifiedResultsHaveConsistentBoundsForEveryMethod) {
   }
 }
 
+
+// Findings of an independent review (session 24), each a case that was certified wrongly.
+
+// The largest entry of X_ii − I over the blocks.
+double block_feasibility_error(const Result& r) {
+  const Eigen::MatrixXd X = r.X();
+  double worst = 0;
+  for (Eigen::Index i = 0; i < X.rows(); i += r.d)
+    worst = std::max(worst, (X.block(i, i, r.d, r.d) - Eigen::MatrixXd::Identity(r.d, r.d)).cwiseAbs().maxCoeff());
+  return worst;
+}
+
+// ‖C‖_F overflowed to inf from entries of 1e154 on and underflowed to 0 below 1e-162: C·s must
+// give s times C's objective, with C's status, at any s a double can hold.
+TEST(SdpReview, ResultsScaleWithCAtExtremeMagnitudes) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::MatrixXd A = fact::test::gaussian_matrix<Eigen::MatrixXd>(6, 6, rng, gauss);
+  Eigen::MatrixXd swap(2, 2);
+  swap << 0, 1, 1, 0;  // N = 2, d = 1: optimum −2, unique
+  for (const Eigen::MatrixXd& C : {Eigen::MatrixXd(swap), Eigen::MatrixXd(A + A.transpose())}) {
+    const Result base = fact::sdp::solve(C, 1);
+    ASSERT_TRUE(base.certified()) << base.reason;
+    for (double s : {1e-200, 1e-170, 1e-150, 1e155, 1e200}) {
+      SCOPED_TRACE("n = " + std::to_string(C.rows()) + ", s = " + std::to_string(std::log10(s)));
+      const Result r = fact::sdp::solve(s * C, 1);
+      EXPECT_EQ(r.status, base.status) << r.reason;
+      EXPECT_NEAR(r.objective / s, base.objective, 1e-9 * std::abs(base.objective));
+      EXPECT_LT(block_feasibility_error(r), 1e-9);
+    }
+  }
+}
+
+// The symmetry check was absolute for small C (1e-9·max(1, max|C|)): a one-sided entry of
+// 5e-10 passed, and the eigensolvers read only the other triangle. It is now relative.
+TEST(SdpReview, OneSidedSmallEntryIsRejected) {
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4, 4);
+  C(0, 1) = 5e-10;
+  const Result r = fact::sdp::solve(C, 1);
+  EXPECT_EQ(r.status, Status::invalid_input);
+  EXPECT_NE(r.reason.find("not symmetric"), std::string::npos) << r.reason;
+}
+
+// N = 2, d = 2 with a zero off-diagonal block: every feasible X is optimal (any R with ‖R‖ ≤ 1),
+// and the closed-form 2 × 2 polar factor, run on rounding for a rank-1 block of the spectral
+// start, returned rows far from orthonormal that were certified unique (11 of 400 seeds).
+TEST(SdpReview, ZeroOffDiagonalBlockGivesAFeasibleNonUniqueOptimum) {
+  for (unsigned seed = 1; seed <= 400; ++seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(4, 4);
+    for (int b = 0; b < 4; b += 2)
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j <= i; ++j) C(b + i, b + j) = C(b + j, b + i) = gauss(rng);
+    for (Method m : {Method::automatic, Method::low_rank}) {
+      Options o;
+      o.method = m;
+      const Result r = fact::sdp::solve(C, 2, o);
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", method " + fact::sdp::to_string(m));
+      ASSERT_TRUE(r.certified()) << r.reason;
+      EXPECT_EQ(r.status, Status::certified_not_unique);
+      EXPECT_LT(block_feasibility_error(r), 1e-9);
+      EXPECT_NEAR(r.objective, C.trace(), 1e-9 * std::max(1.0, std::abs(C.trace())));
+    }
+  }
+}
+
+// A random symmetric C (d = 1, N = 17, the review's seed) had λ_min(S) = −1.2e-10 and
+// λ_2(S) = 1.3e-10 with X of rank 2, and was called unique; a unique optimum has rank d.
+TEST(SdpReview, UniqueOnlyAtRankD) {
+  for (unsigned seed : {2700u, 800u, 3000u}) {
+    for (int d : {1, 2}) {
+      std::mt19937 rng(seed);
+      std::normal_distribution<double> gauss(0.0, 1.0);
+      const int n = d * (d == 1 ? 17 : 17);
+      const Eigen::MatrixXd A = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+      for (Method m : {Method::automatic, Method::interior_point}) {
+        Options o;
+        o.method = m;
+        const Result r = fact::sdp::solve(A + A.transpose(), d, o);
+        SCOPED_TRACE("seed " + std::to_string(seed) + ", d = " + std::to_string(d));
+        ASSERT_TRUE(r.certified()) << r.reason;
+        if (r.status == Status::certified_unique) EXPECT_EQ(r.rank, d) << r.reason;
+      }
+    }
+  }
+}
+
 }  // namespace

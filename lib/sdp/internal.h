@@ -207,6 +207,15 @@ double lanczos_lowest(Eigen::Index n, int steps, Apply apply) {
   return lowest_tridiagonal_eigenvalue(alpha.head(done), beta.head(done - 1));
 }
 
+// polar_rows and Newton's retraction use the closed-form 2 × 2 polar factor while
+// det(G Gᵀ) > kPolarClosedFormDet·tr(G Gᵀ)² and its rows come out orthonormal to
+// kOrthonormalTol (checked in 2 × 2 before they are formed, when det < kPolarCheckDet·tr²);
+// otherwise the SVD. det carries an absolute rounding error of about ε·tr², so for a nearly rank-1
+// G the check is what decides; above 1e-8·tr² that error moves P Pᵀ by well under 1e-10.
+constexpr double kPolarClosedFormDet = 1e-20;
+constexpr double kOrthonormalTol = 1e-10;
+constexpr double kPolarCheckDet = 1e-8;  // the check runs only below det = kPolarCheckDet·tr²
+
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
 // leaving the rest untouched, at the first block with no direction (all zero).
 bool project_blocks(Eigen::MatrixXd& Y, int d);

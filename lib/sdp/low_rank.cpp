@@ -17,17 +17,24 @@ Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
     return norm > 0 ? Eigen::MatrixXd(G / norm) : Eigen::MatrixXd();
   }
   // d = 2: M = G Gᵀ (2 × 2 SPD); M^{-1/2} = (√M)^{-1}, √M = (M + √det I)/√(tr M + 2√det).
+  // det is formed with an absolute error of about ε·tr², so for a nearly rank-1 G the closed form
+  // divides by rounding (an independent review: det = 8.9e-18·tr² for a rank-1 G, rows far from
+  // orthonormal). Its result P = R⁻¹ G has P Pᵀ = R⁻¹ M R⁻¹, checked in 2 × 2 before it is formed;
+  // when that is not I to 1e-10, the SVD.
   const Eigen::Matrix2d M = G * G.transpose();
   const double det = M.determinant(), tr = M.trace();
-  if (!(det > 1e-20 * tr * tr)) {  // rank-deficient: fall back to the SVD
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(G, Eigen::ComputeThinU | Eigen::ComputeThinV);
-    if (svd.singularValues()(0) <= 0) return Eigen::MatrixXd();
-    return svd.matrixU() * svd.matrixV().transpose();
+  if (det > kPolarClosedFormDet * tr * tr) {
+    const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
+    const Eigen::Matrix2d root_inv = ((M + s * Eigen::Matrix2d::Identity()) / t).inverse();
+    if (det >= kPolarCheckDet * tr * tr) return root_inv * G;
+    const Eigen::Matrix2d PPt = root_inv * M * root_inv;
+    if ((PPt - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() <= kOrthonormalTol) return root_inv * G;
   }
-  const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
-  const Eigen::Matrix2d root = (M + s * Eigen::Matrix2d::Identity()) / t;
-  return root.inverse() * G;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(G, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  if (!(svd.singularValues()(0) > 0)) return Eigen::MatrixXd();
+  return svd.matrixU() * svd.matrixV().transpose();
 }
+
 
 bool project_blocks(Eigen::MatrixXd& Y, int d) {
   for (Eigen::Index i = 0; i < Y.rows(); i += d) {

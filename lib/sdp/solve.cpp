@@ -106,8 +106,26 @@ double primal_objective(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, cons
 }
 
 // (A candidate without a factor, from a method that found no point, is never certified.)
+// The largest entry of Y_i Y_iᵀ − I over the blocks: how far X = Y Yᵀ is from feasible.
+double feasibility_error(const Eigen::MatrixXd& Y, int d) {
+  double worst = 0;
+  for (Eigen::Index i = 0; i + d <= Y.rows(); i += d)
+    for (int a = 0; a < d; ++a)
+      for (int b = a; b < d; ++b) {
+        const double entry = Y.row(i + a).dot(Y.row(i + b));
+        worst = std::max(worst, std::abs(entry - (a == b ? 1.0 : 0.0)));
+      }
+  return worst;
+}
+// A candidate's X counts as feasible within this (its objective and certificate assume X_ii = I).
+constexpr double kFeasibilityTol = 1e-8;
+
+// (A candidate without a factor, from a method that found no point, or whose X is not feasible,
+// is never certified: an independent review found rank-1 blocks from the closed-form polar factor
+// certified with X_ii off I by 0.7.)
 bool is_certified(const Candidate& c, const Options& o) {
-  return c.Y.size() > 0 && c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol;
+  return c.Y.size() > 0 && c.cert.min_eig >= -o.psd_tol && relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol &&
+         feasibility_error(c.Y, static_cast<int>(c.cert.lambda.cols() > 0 ? c.cert.lambda.cols() : 1)) <= kFeasibilityTol;
 }
 
 // The certificate of a factor Y (n × r, feasible) against its own multipliers Λ(Y), and the
@@ -434,6 +452,9 @@ void classify(Result& r, const Candidate& c, const Options& o) {
   if (c.Y.size() == 0) {
     r.reason = printed("%s found no primal point", to_string(c.method)) + note;
     r.status = Status::not_certified;
+  } else if (const double infeasible = feasibility_error(c.Y, r.d); !(infeasible <= kFeasibilityTol)) {
+    r.reason = printed("%s gave an infeasible X: a block of Y Yᵀ is off I by %g", to_string(c.method), infeasible) + note;
+    r.status = Status::not_certified;
   } else if (r.min_eig_S < -o.psd_tol) {
     r.reason = printed("S = C − Λ has λ_min = %g < −%g after %d %s iterations", r.min_eig_S, o.psd_tol, r.iterations,
                        to_string(c.method)) + note;
@@ -447,6 +468,13 @@ void classify(Result& r, const Candidate& c, const Options& o) {
     // reason says no more than the certificate.
     r.reason = printed("optimal, but S has nullity %d > d = %d (λ_%d(S) = %g < %g): other optima may exist; X has rank %d",
                        r.nullity, r.d, r.d + 1, r.eig_gap, o.null_tol, r.rank);
+    r.status = Status::certified_not_unique;
+  } else if (r.rank > r.d) {
+    // A unique optimum has rank d; X of higher rank with S of nullity d means S's smallest
+    // eigenvalues are at the level of psd_tol, where the count does not decide (review: λ_min(S)
+    // = −1.2e-10 and λ_2(S) = 1.3e-10 with X of rank 2 for d = 1, nullity 2 at a tighter gap).
+    r.reason = printed("optimal; S has nullity %d = d, but X has rank %d > d = %d (λ_min(S) = %g, λ_%d(S) = %g): "
+                       "other optima may exist", r.nullity, r.rank, r.d, r.min_eig_S, r.d + 1, r.eig_gap);
     r.status = Status::certified_not_unique;
   } else {
     r.reason = printed("optimal and unique: λ_min(S) = %g, nullity %d, λ_%d(S) = %g", r.min_eig_S, r.nullity, r.d + 1,
@@ -464,8 +492,17 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.reason = validate(C, d);
   if (!r.reason.empty()) return r;
   r.blocks = static_cast<int>(C.rows() / d);
-  r.scale = C.norm() > 0 ? C.norm() : 1.0;
-  const Eigen::MatrixXd Cs = C / r.scale;  // scaled problem, ‖Cs‖_F = 1 (or C = 0)
+  // ‖C‖_F without overflow or underflow: C.norm() is inf from entries of 1e154 on and 0 below
+  // 1e-162, which left C unscaled against absolute tolerances; outside its safe range the scaled
+  // sum (stableNorm) is used. Inside it norm() stays: stableNorm differs in the last bit, and that
+  // alone took plain_noisy N = 4 (one sweep seed) from 4 Newton steps to 27 (session 24). The
+  // scaled C is made exactly symmetric, since the eigensolvers read one triangle and validate
+  // allows 1e-9 of asymmetry.
+  double norm = C.norm();
+  if (!(norm > 1e-140 && norm < 1e140)) norm = C.stableNorm();
+  r.scale = norm > 0 ? norm : 1.0;
+  Eigen::MatrixXd Cs = C / r.scale;  // scaled problem, ‖Cs‖_F = 1 (or C = 0)
+  Cs = (0.5 * (Cs + Cs.transpose())).eval();
 
   const bool complex_form = d == 2 && (options.method == Method::automatic || options.method == Method::complex_low_rank) &&
                             detail::complex_embedding_mismatch(Cs).empty();

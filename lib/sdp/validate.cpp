@@ -38,7 +38,7 @@ std::string validate(const Eigen::MatrixXd& C, int d) {
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = 0; i < C.rows(); ++i)
       if (!std::isfinite(C(i, j))) return printed("C(%td,%td) = %g: not finite", i, j, C(i, j));
-  const double tol = 1e-9 * std::max(1.0, C.cwiseAbs().maxCoeff());
+  const double tol = 1e-9 * C.cwiseAbs().maxCoeff();  // relative to C's own scale, whatever it is
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = j + 1; i < C.rows(); ++i)
       if (std::abs(C(i, j) - C(j, i)) > tol)
