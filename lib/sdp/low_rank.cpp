@@ -19,8 +19,8 @@ Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
   // d = 2: M = G Gᵀ (2 × 2 SPD); M^{-1/2} = (√M)^{-1}, √M = (M + √det I)/√(tr M + 2√det).
   // det is formed with an absolute error of about ε·tr², so for a nearly rank-1 G the closed form
   // divides by rounding (an independent review: det = 8.9e-18·tr² for a rank-1 G, rows far from
-  // orthonormal). Its result P = R⁻¹ G has P Pᵀ = R⁻¹ M R⁻¹, checked in 2 × 2 before it is formed;
-  // when that is not I to 1e-10, the SVD.
+  // orthonormal). Its result P = R⁻¹ G has P Pᵀ = R⁻¹ M R⁻¹, checked in 2 × 2 before it is formed
+  // when det < kPolarCheckDet·tr²; when that is not I to 1e-10, the SVD.
   const Eigen::Matrix2d M = G * G.transpose();
   const double det = M.determinant(), tr = M.trace();
   if (det > kPolarClosedFormDet * tr * tr) {
@@ -34,7 +34,6 @@ Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
   if (!(svd.singularValues()(0) > 0)) return Eigen::MatrixXd();
   return svd.matrixU() * svd.matrixV().transpose();
 }
-
 
 bool project_blocks(Eigen::MatrixXd& Y, int d) {
   for (Eigen::Index i = 0; i < Y.rows(); i += d) {

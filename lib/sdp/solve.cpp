@@ -105,7 +105,6 @@ double primal_objective(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, cons
   return cert.trace_lambda + Y.cwiseProduct(SY).sum();
 }
 
-// (A candidate without a factor, from a method that found no point, is never certified.)
 // The largest entry of Y_i Y_iᵀ − I over the blocks: how far X = Y Yᵀ is from feasible.
 double feasibility_error(const Eigen::MatrixXd& Y, int d) {
   double worst = 0;

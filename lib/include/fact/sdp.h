@@ -21,7 +21,7 @@
 namespace fact::sdp {
 
 enum class Status {
-  certified_unique,      // X is optimal (S ⪰ 0, small gap) and S has nullity exactly d
+  certified_unique,      // X is optimal (S ⪰ 0, small gap), S has nullity exactly d and X rank d
   certified_not_unique,  // X is optimal, but S has nullity > d: other optima may exist
   not_certified,         // no certificate of optimality was found
   invalid_input,         // C or d is unusable; reason names the field and value
