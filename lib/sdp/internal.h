@@ -215,6 +215,10 @@ double lanczos_lowest(Eigen::Index n, int steps, Apply apply) {
 constexpr double kPolarClosedFormDet = 1e-20;
 constexpr double kOrthonormalTol = 1e-10;
 constexpr double kPolarCheckDet = 1e-8;  // the check runs only below det = kPolarCheckDet·tr²
+// (√M)⁻¹ = [[i00, i01], [i01, i11]] for M = G Gᵀ = [[m00, m01], [m01, m11]] (d = 2) in closed form,
+// √M = (M + √det I)/√(tr M + 2√det); false when that form is not to be trusted (the rules above),
+// and then the polar factor is to come from the SVD.
+bool polar_closed_form(double m00, double m01, double m11, double& i00, double& i01, double& i11);
 
 // Projects every d-row block of Y to orthonormal rows (polar_rows), in place. Returns false,
 // leaving the rest untouched, at the first block with no direction (all zero).

@@ -1,4 +1,5 @@
 // Burer–Monteiro Riemannian staircase with block-coordinate minimisation.
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -16,23 +17,33 @@ Eigen::MatrixXd polar_rows(const Eigen::MatrixXd& G) {
     const double norm = G.norm();
     return norm > 0 ? Eigen::MatrixXd(G / norm) : Eigen::MatrixXd();
   }
-  // d = 2: M = G Gᵀ (2 × 2 SPD); M^{-1/2} = (√M)^{-1}, √M = (M + √det I)/√(tr M + 2√det).
-  // det is formed with an absolute error of about ε·tr², so for a nearly rank-1 G the closed form
-  // divides by rounding (an independent review: det = 8.9e-18·tr² for a rank-1 G, rows far from
-  // orthonormal). Its result P = R⁻¹ G has P Pᵀ = R⁻¹ M R⁻¹, checked in 2 × 2 before it is formed
-  // when det < kPolarCheckDet·tr²; when that is not I to 1e-10, the SVD.
-  const Eigen::Matrix2d M = G * G.transpose();
-  const double det = M.determinant(), tr = M.trace();
-  if (det > kPolarClosedFormDet * tr * tr) {
-    const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
-    const Eigen::Matrix2d root_inv = ((M + s * Eigen::Matrix2d::Identity()) / t).inverse();
-    if (det >= kPolarCheckDet * tr * tr) return root_inv * G;
-    const Eigen::Matrix2d PPt = root_inv * M * root_inv;
-    if ((PPt - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() <= kOrthonormalTol) return root_inv * G;
+  // d = 2: P = (G Gᵀ)^{-1/2} G by polar_closed_form, or the SVD when that form is not trusted
+  // (an independent review found a rank-1 G, det = 8.9e-18·tr², given rows far from orthonormal).
+  const double m00 = G.row(0).squaredNorm(), m11 = G.row(1).squaredNorm(), m01 = G.row(0).dot(G.row(1));
+  double i00, i01, i11;
+  if (polar_closed_form(m00, m01, m11, i00, i01, i11)) {
+    Eigen::MatrixXd P(2, G.cols());
+    P.row(0) = i00 * G.row(0) + i01 * G.row(1);
+    P.row(1) = i01 * G.row(0) + i11 * G.row(1);
+    return P;
   }
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(G, Eigen::ComputeThinU | Eigen::ComputeThinV);
   if (!(svd.singularValues()(0) > 0)) return Eigen::MatrixXd();
   return svd.matrixU() * svd.matrixV().transpose();
+}
+
+bool polar_closed_form(double m00, double m01, double m11, double& i00, double& i01, double& i11) {
+  const double det = m00 * m11 - m01 * m01, tr = m00 + m11;
+  if (!(det > kPolarClosedFormDet * tr * tr)) return false;
+  const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
+  const double r00 = (m00 + s) / t, r11 = (m11 + s) / t, r01 = m01 / t, det_root = r00 * r11 - r01 * r01;
+  i00 = r11 / det_root, i11 = r00 / det_root, i01 = -r01 / det_root;
+  if (det >= kPolarCheckDet * tr * tr) return true;
+  // det is rounding-sized against tr²: check P Pᵀ = R⁻¹ M R⁻¹ = I (R⁻¹ = [[i00, i01], [i01, i11]]).
+  const double a00 = i00 * m00 + i01 * m01, a01 = i00 * m01 + i01 * m11;
+  const double a10 = i01 * m00 + i11 * m01, a11 = i01 * m01 + i11 * m11;
+  const double q00 = a00 * i00 + a01 * i01, q01 = a00 * i01 + a01 * i11, q11 = a10 * i01 + a11 * i11;
+  return std::max({std::abs(q00 - 1.0), std::abs(q01), std::abs(q11 - 1.0)}) <= kOrthonormalTol;
 }
 
 bool project_blocks(Eigen::MatrixXd& Y, int d) {

@@ -159,22 +159,8 @@ void retract_rows(Eigen::MatrixXd& Y, Eigen::Index row, int d) {
     return;
   }
   const double m00 = G.row(0).squaredNorm(), m11 = G.row(1).squaredNorm(), m01 = G.row(0).dot(G.row(1));
-  const double det = m00 * m11 - m01 * m01, tr = m00 + m11;
-  // √M = (M + √det I)/t, t = √(tr M + 2√det); (√M)⁻¹ = t/det(√M+…) · adj: here det(√M) = √det.
-  // The result's P Pᵀ = R⁻¹ M R⁻¹ (R = √M) is checked first in 2 × 2: near rank 1 det is rounding
-  // and the closed form fails it, and polar_rows (its SVD) takes over.
-  bool closed_form = det > kPolarClosedFormDet * tr * tr;
-  double i00 = 0, i11 = 0, i01 = 0;
-  if (closed_form) {
-    const double s = std::sqrt(det), t = std::sqrt(tr + 2.0 * s);
-    const double r00 = (m00 + s) / t, r11 = (m11 + s) / t, r01 = m01 / t, det_root = r00 * r11 - r01 * r01;
-    i00 = r11 / det_root, i11 = r00 / det_root, i01 = -r01 / det_root;
-    if (det < kPolarCheckDet * tr * tr) {  // det's rounding is not negligible: check the rows
-      const Eigen::Matrix2d inv{{i00, i01}, {i01, i11}}, M{{m00, m01}, {m01, m11}};
-      closed_form = ((inv * M * inv) - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() <= kOrthonormalTol;
-    }
-  }
-  if (!closed_form) {
+  double i00, i01, i11;  // (G Gᵀ)^{-1/2}, or the SVD in polar_rows when the closed form is not trusted
+  if (!polar_closed_form(m00, m01, m11, i00, i01, i11)) {
     const Eigen::MatrixXd polar = polar_rows(G);
     if (polar.size() > 0) G = polar;
     return;
