@@ -990,7 +990,9 @@ TEST(SdpReview, UniqueOnlyAtRankD) {
         const Result r = fact::sdp::solve(A + A.transpose(), d, o);
         SCOPED_TRACE("seed " + std::to_string(seed) + ", d = " + std::to_string(d));
         ASSERT_TRUE(r.certified()) << r.reason;
-        if (r.status == Status::certified_unique) EXPECT_EQ(r.rank, d) << r.reason;
+        if (r.status == Status::certified_unique) {
+          EXPECT_EQ(r.rank, d) << r.reason;
+        }
       }
     }
   }
