@@ -982,7 +982,7 @@ TEST(SdpReview, UniqueOnlyAtRankD) {
     for (int d : {1, 2}) {
       std::mt19937 rng(seed);
       std::normal_distribution<double> gauss(0.0, 1.0);
-      const int n = d * (d == 1 ? 17 : 17);
+      const int n = 17 * d;  // N = 17, the review's size
       const Eigen::MatrixXd A = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
       for (Method m : {Method::automatic, Method::interior_point}) {
         Options o;
