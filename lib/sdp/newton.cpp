@@ -249,23 +249,23 @@ struct SchurWorkspace {
 // Y + V = W blkdiag(λI − Ν) Y cancels terms of order 1 there and lost 4 of the step's digits at
 // λ = 5e-9). M is the interior point's Schur complement for X and W, positive definite when
 // S + λI is (X_ii = I); its factorisation fails only by rounding. Cost: one n × n factorisation,
-// inversion and product, and an m × m factorisation, whatever r is.
-enum class SchurTrial { formed, shift_too_small, schur_not_definite };
-SchurTrial schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vector<Entry>& entries,
+// inversion and product, and an m × m factorisation, whatever r is. False when S + λI or M does not
+// factor (no trial formed).
+bool schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vector<Entry>& entries,
                        SchurWorkspace& ws) {
   const Eigen::Index n = Y.rows();
   ws.shifted = ws.S;
   ws.shifted.diagonal().array() += lambda;
   if (n <= kExactStepMaxSize) {
-    if (!cholesky_lower(ws.shifted, ws.L)) return SchurTrial::shift_too_small;
+    if (!cholesky_lower(ws.shifted, ws.L)) return false;
   } else {
     ws.L.swap(ws.shifted);
-    if (!cholesky_in_place(ws.L)) return SchurTrial::shift_too_small;
+    if (!cholesky_in_place(ws.L)) return false;
   }
   invert_lower_factor(ws.L, ws.L_inv);
   gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᵀ L⁻¹
   schur_complement(ws.X, ws.W, entries, ws.M);
-  if (!ws.llt.factor(ws.M)) return SchurTrial::schur_not_definite;
+  if (!ws.llt.factor(ws.M)) return false;
   ws.WSY.noalias() = ws.W * ws.SY;
   for (std::size_t p = 0; p < entries.size(); ++p) {  // −A((W S Y) Yᵀ)
     const auto [u, v] = entries[p];
@@ -279,7 +279,7 @@ SchurTrial schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std
   ws.next = Y;
   ws.next.noalias() -= ws.W * ws.pushed;  // Y + V
   for (Eigen::Index i = 0; i < n; i += d) retract_rows(ws.next, i, d);
-  return SchurTrial::formed;
+  return true;
 }
 
 // Damped Newton in Schur form (schur_trial), with the dense path's damping rule: λ raised 10×
@@ -300,7 +300,7 @@ int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_it
     ws.X.noalias() = Y * Y.transpose();
     bool accepted = false;
     for (int tries = 0; tries < 12 && !accepted; ++tries, lambda *= 10) {
-      if (schur_trial(Y, d, lambda, entries, ws) != SchurTrial::formed) continue;
+      if (!schur_trial(Y, d, lambda, entries, ws)) continue;
       ws.next_CY.noalias() = C * ws.next;
       const double f_next = ws.next.cwiseProduct(ws.next_CY).sum();
       if (!(f_next <= f + noise)) continue;
