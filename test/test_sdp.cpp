@@ -82,8 +82,8 @@ void expect_certificate(const Eigen::MatrixXd& C, int d, const Result& r) {
     EXPECT_LE((X.block(i, i, d, d) - Eigen::MatrixXd::Identity(d, d)).cwiseAbs().maxCoeff(), 1e-7)
         << "diagonal block at " << i;
   EXPECT_NEAR(r.objective, (C.cwiseProduct(X)).sum(), rel_tol(1e-9, r.objective) * std::max(1.0, C.norm()));
-  // The dual bound is tr Λ + n·min(0, λ_min(S) + e) with S = C − blkdiag(Λ) (unscaled) and e
-  // the eigensolver's error bound (O(n ε ‖S‖), far inside the tolerance below).
+  // The dual bound is tr Λ + n·min(0, λ_min(S)) with S = C − blkdiag(Λ) (unscaled); the
+  // reported bound_error allows for the eigensolver's error in λ_min.
   Eigen::MatrixXd S = C;
   for (Eigen::Index i = 0; i < n; i += d) S.block(i, i, d, d) -= r.Lambda.middleRows(i, d);
   EXPECT_LE((S - S.transpose()).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, C.norm()));
@@ -93,6 +93,8 @@ void expect_certificate(const Eigen::MatrixXd& C, int d, const Result& r) {
   EXPECT_NEAR(r.dual_bound, trace_lambda + static_cast<double>(n) * std::min(0.0, lmin),
               1e-9 * std::max(1.0, C.norm()));
   EXPECT_NEAR(lmin / r.scale, r.min_eig_S, 1e-9);
+  EXPECT_GE(r.bound_error, 0.0);
+  EXPECT_LE(r.bound_error, 4.0 * n * n * std::numeric_limits<double>::epsilon() * 2.0 * std::max(1.0, C.norm()));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -994,6 +996,34 @@ TEST(SdpReview, UniqueOnlyAtRankD) {
           EXPECT_EQ(r.rank, d) << r.reason;
         }
       }
+    }
+  }
+}
+
+// The dual bound was tr Λ + n·min(0, λ_min(S) + e), e the eigensolver's error bound: that moves
+// a slightly negative λ_min up to 0, so C = v vᵀ − t·J (v = e₀ − e₁, J all ones, t = 2⁻⁵¹, λ_min(C)
+// = −n t) got bound 0 above the objective ⟨C, J⟩ = −n² t of the feasible X = J. The bound is now the
+// issue's tr Λ + n·min(0, λ_min(S)); bound_error covers the eigensolver's error in λ_min.
+TEST(SdpReview, DualBoundIsNotRaisedByTheEigensolverTolerance) {
+  for (int n : {3, 10, 40}) {
+    const double t = std::ldexp(1.0, -51);
+    Eigen::MatrixXd C = Eigen::MatrixXd::Constant(n, n, -t);
+    C(0, 0) += 1;
+    C(1, 1) += 1;
+    C(0, 1) -= 1;
+    C(1, 0) -= 1;
+    const double objective_of_J = C.sum();  // −n² t: exact (every partial sum is representable)
+    ASSERT_EQ(objective_of_J, -n * n * t);
+    for (Method m : {Method::automatic, Method::null_space, Method::interior_point}) {
+      Options o;
+      o.method = m;
+      const Result r = fact::sdp::solve(C, 1, o);
+      SCOPED_TRACE("n = " + std::to_string(n) + ", method " + fact::sdp::to_string(m));
+      ASSERT_TRUE(std::isfinite(r.dual_bound)) << r.reason;
+      // Within 1 % of −n² t (the computed λ_min carries rounding of its own), and strictly below
+      // once bound_error is taken off.
+      EXPECT_LE(r.dual_bound, objective_of_J + 0.01 * std::abs(objective_of_J));
+      EXPECT_LE(r.dual_bound - r.bound_error, objective_of_J);
     }
   }
 }

@@ -27,6 +27,8 @@ struct Certificate {
   double trace_lambda = 0;    // tr Λ: the dual objective
   double min_eig = 0;         // λ_min(S)
   double dual_bound = 0;      // tr Λ + n·min(0, λ_min(S)): a lower bound on the optimum
+  double bound_error = 0;     // n·e, e the eigensolver's error bound: dual_bound − bound_error is
+                              // a lower bound even if the computed λ_min(S) is e too high
 };
 
 // Λ from a primal factor Y (n × r) whose d×d diagonal blocks of Y Yᵀ are I.
@@ -36,7 +38,7 @@ Eigen::MatrixXd lambda_from_factor(const Eigen::MatrixXd& C, const Eigen::Matrix
 Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d);
 void certificate_matrix(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, Eigen::MatrixXd& S);
 
-// min_eig and dual_bound of cert from its eigenvalues (all n of S) and trace_lambda.
+// min_eig, dual_bound and bound_error of cert from its eigenvalues (all n of S) and trace_lambda.
 void bound_from_spectrum(Certificate& cert);
 // 4nε·scale: the backward error of a symmetric eigensolver on an n × n matrix of 2-norm scale (at
 // least the smallest normal double), within which an eigenvalue counts as 0.

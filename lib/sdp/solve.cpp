@@ -551,6 +551,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.Lambda = best.cert.lambda * r.scale;
   r.objective = primal * r.scale;
   r.dual_bound = best.cert.dual_bound * r.scale;
+  r.bound_error = best.cert.bound_error * r.scale;
   r.rel_gap = relative_gap(primal, best.cert.dual_bound);
   r.min_eig_S = best.cert.min_eig;
   r.rank = rank;
@@ -558,7 +559,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   classify(r, best, options);  // (without a primal point it reads only that)
   if (best.Y.size() == 0) {      // no primal point (an explicit method that found none): no figures either
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    r.objective = r.dual_bound = r.rel_gap = r.min_eig_S = r.eig_gap = nan;
+    r.objective = r.dual_bound = r.bound_error = r.rel_gap = r.min_eig_S = r.eig_gap = nan;
   }
   r.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return r;

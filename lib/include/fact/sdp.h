@@ -67,7 +67,9 @@ struct Result {
   // Dual certificate: Λ_ii stacked vertically, n × d (block i is rows d·i … d·i+d−1).
   Eigen::MatrixXd Lambda;
   double objective = 0;      // ⟨C, X⟩ (unscaled)
-  double dual_bound = 0;     // tr Λ + n·min(0, λ_min(S) + e) (unscaled), e = 4nε‖S‖₂ the eigensolver's error bound
+  double dual_bound = 0;     // tr Λ + n·min(0, λ_min(S)) (unscaled): ⟨C, X⟩ ≥ it for every feasible X
+  double bound_error = 0;    // n·e (unscaled), e = 4nε‖S‖₂ the eigensolver's error bound on λ_min(S):
+                             // dual_bound − bound_error holds even allowing for that error
   double rel_gap = 0;        // (objective − dual_bound) / max(1e-4, |objective|, |dual_bound|), scaled problem
   double min_eig_S = 0;      // λ_min(S), S = C/‖C‖_F − Λ/‖C‖_F (scaled)
   double eig_gap = 0;        // λ_{d+1}(S) (scaled): > null_tol means nullity ≤ d
@@ -76,7 +78,7 @@ struct Result {
   int iterations = 0;        // sweeps (low rank) or Newton steps (interior point)
   double time_ms = 0;        // wall time of the whole solve, certification included
   // When no primal point was found (an explicit method that reports why, status not_certified),
-  // Y and Lambda are empty and objective, dual_bound, rel_gap, min_eig_S and eig_gap are NaN.
+  // Y and Lambda are empty and objective, dual_bound, bound_error, rel_gap, min_eig_S and eig_gap are NaN.
   double scale = 1;          // ‖C‖_F used to scale the problem
 
   bool certified() const {
