@@ -25,14 +25,16 @@
 # the log), --seed S, --spin-rate R, --max-rounds K, --noise-quadratic Q (override run-params.txt),
 # --no-build.
 # Exit codes: 0 the replay matches; 1 it differs (the table says what); 2 bad input (unreadable
-# log, no result in it, a drone id without a result, bad flags); 125 no private namespace.
+# log, no result in it, a drone id without a result, a log that lost messages — fewer results or
+# complete rounds of a drone than its apps' FACT_STATUS counters say they published — bad flags);
+# 125 no private namespace.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$here/scripts/lib/args.sh"
 
 die() { echo "replay: $*" >&2; exit 2; }
 [ "$#" -ge 1 ] || die "usage: scripts/replay.sh LOG [--out DIR] [--speed X] [--drones IDS] [--seed S] [--spin-rate R] [--max-rounds K] [--noise-quadratic Q] [--no-build]"
-case "$1" in -h|--help) sed -n '2,28p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;; esac
+case "$1" in -h|--help) sed -n '2,30p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;; esac
 log=$1
 shift
 out="" speed=1 drones="" seed="" spin_rate="" max_rounds="" noise_quadratic="" build=1

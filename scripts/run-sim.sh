@@ -120,7 +120,8 @@ out="$(cd "$out" && pwd)"
 
 # ---------------------------------------------------------------- install and build (outside the namespace)
 if [ -z "${FACT_RUN_SIM_INNER:-}" ]; then
-  targets=(fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge fact-run-report fact-log-merge)
+  targets=(fact-sim fact-detector fact-vio-relay fact-gossip fact-solver fact-planner fact-fc-bridge fact-run-report fact-log-merge
+           fact-log-compare)
   if [ "$build" = 1 ]; then
     "$here/scripts/install-deps.sh"
     mkdir -p "$build_dir"
@@ -173,8 +174,8 @@ B="$FACT_RUN_SIM_BUILD"
 bin_sim="$B/apps/fact_sim/fact-sim" bin_det="$B/apps/fact_detector/fact-detector" bin_vio="$B/apps/fact-vio-relay"
 bin_gos="$B/apps/fact-gossip" bin_sol="$B/apps/fact-solver" bin_pla="$B/apps/fact_planner/fact-planner"
 bin_fcb="$B/firmware_bridge/fact-fc-bridge" bin_rep="$B/apps/fact_run_report/fact-run-report"
-bin_mrg="$B/apps/fact-log-merge"
-for b in "$bin_sim" "$bin_det" "$bin_vio" "$bin_gos" "$bin_sol" "$bin_pla" "$bin_fcb" "$bin_rep" "$bin_mrg"; do
+bin_mrg="$B/apps/fact-log-merge" bin_cmp="$B/apps/fact-log-compare"
+for b in "$bin_sim" "$bin_det" "$bin_vio" "$bin_gos" "$bin_sol" "$bin_pla" "$bin_fcb" "$bin_rep" "$bin_mrg" "$bin_cmp"; do
   [ -x "$b" ] || { echo "run-sim: $b is missing (build first, or drop --no-build)" >&2; exit 1; }
 done
 command -v lcm-logger >/dev/null || { echo "run-sim: lcm-logger not found (liblcm-bin)" >&2; exit 1; }
@@ -286,16 +287,22 @@ start() {
 printf 'ids=%s\nseed=%s\nspin_rate=%s\nmax_rounds=%s\nnoise_quadratic=%s\n' "${ids// /,}" "$seed" "$spin_rate" "$max_rounds" \
   "$noise_quadratic" >"$out/run-params.txt"
 
-# One recorder per bus (an LCM URL is one group), merged into run.lcm at the end. They run at a
-# higher priority (where allowed), so that a loaded machine does not make them drop messages from
-# their socket buffers.
-record() {  # record URL NAME
-  nice -n -5 lcm-logger --lcm-url="${1%%&*}&recv_buf_size=16777216" --quiet "$out/logs/$2.lcm" >"$out/logs/lcm-logger-$2.log" 2>&1 &
+# One recorder per bus (an LCM URL is one group), merged into run.lcm at the end. A drone's bus is
+# recorded inside that drone's namespace, on the path its own apps receive it by (a recorder
+# outside took it over the veth and bridge, and once missed two messages that drone 0's planner
+# had acted on); the swarm bus is recorded here, beside the bridge. They run at a higher priority
+# (where allowed), so that a loaded machine does not make them drop messages from their socket
+# buffers.
+record() {  # record URL NAME ID (ID: the drone whose namespace to record in, -1 here)
+  local pre
+  read -r -a pre <<<"$(ns_prefix "$3")"
+  nice -n -5 "${pre[@]}" lcm-logger --lcm-url="${1%%&*}&recv_buf_size=16777216" --quiet "$out/logs/$2.lcm" \
+    >"$out/logs/lcm-logger-$2.log" 2>&1 &
   logger_pids+=("$!")
   bus_logs+=("$out/logs/$2.lcm")
 }
-record "$BUS" bus-swarm
-for id in $ids; do record "$(fill_url "$DRONE_BUS" "$id")" "bus-$id"; done
+record "$BUS" bus-swarm -1
+for id in $ids; do record "$(fill_url "$DRONE_BUS" "$id")" "bus-$id" "$id"; done
 
 for id in $ids; do
   c=(--drone-id "$id" --lcm-url "$(fill_url "$DRONE_BUS" "$id")" --sim-clock)
@@ -406,6 +413,15 @@ if ! merge_logs; then
 fi
 
 echo "== run ended: $verdict, after $(printf '%.1f' "$wall_s") s of wall time"
+# Whether run.lcm holds every result and complete round the apps published (their status counters):
+# a recorder can miss UDP messages on a loaded machine, and a replay of such a log cannot match.
+# (A log without any result is fact-log-compare's error too, and not this warning.)
+lost=""
+[ -f "$out/run.lcm" ] && lost=$("$bin_cmp" "$out/run.lcm" "$out/run.lcm" --no-planner 2>&1 >/dev/null | grep "recorder lost" || true)
+if [ -n "$lost" ]; then
+  echo "== warning: run.lcm is incomplete, so scripts/replay.sh will refuse it:" >&2
+  echo "$lost" | sed 's/^fact-log-compare: error: /   /' >&2
+fi
 planner_codes=""
 for id in $ids; do
   line=$(grep -a -E "state: done" "$out/logs/fact-planner-$id.log" | tail -n 1 | sed -E 's/^[0-9T:.-]+Z //' || true)

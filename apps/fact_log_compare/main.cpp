@@ -8,13 +8,17 @@
 //   fact-log-compare ORIGINAL.lcm REPLAY.lcm [--drones 0,1,2] [--no-planner]
 //
 // Prints one table row per drone. Exit codes: 0 everything matches; 1 something differs (the row
-// says what); 2 bad flags, an unreadable log, or no result in the original.
+// says what); 2 bad flags, an unreadable log, no result in the original, or a log that lost
+// messages: one holding fewer results (or complete rounds) of a drone than its fact-solver (or
+// fact-gossip) counted as published in its FACT_STATUS heartbeats (results_published,
+// swarm_rounds_published) — a recorder that missed UDP messages, which no replay can match.
 #include "common/app.h"
 #include "common/log_reader.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -34,7 +38,17 @@ struct DroneTrace {
   int last_rounds = 0;
   std::vector<std::string> planner_states;  // "<phase> round <k>", consecutive repeats dropped
   std::string planner_final;                // the last full state string
+  int rounds_recorded = 0;                  // FACT_SWARM_ROUNDS_<id> messages in the log
+  int64_t results_published = 0;            // fact-solver's largest results_published counter
+  int64_t rounds_published = 0;             // fact-gossip's largest swarm_rounds_published counter
 };
+
+// The largest value of counter name in m (0 when m has none).
+int64_t counter(const fact::app_status_t& m, const std::string& name) {
+  for (int i = 0; i < m.num_counters; ++i)
+    if (m.counter_names[i] == name) return m.counter_values[i];
+  return 0;
+}
 
 // "spin round 1: spin 2π ..." → "spin round 1". Not decisions (""): hovers ("hover: odometry
 // stale ...") and waits ("wait round 1: ..."), whose presence depends on whether the round's result
@@ -45,11 +59,14 @@ std::string decision(const std::string& state) {
   return head;
 }
 
-bool read_log(const std::string& path, const std::string& result_prefix, const std::string& status_channel,
-              std::map<int, DroneTrace>* out) {
+struct Channels {
+  std::string result_prefix, rounds_prefix, status;  // "FACT_RESULT_", "FACT_SWARM_ROUNDS_", "FACT_STATUS"
+};
+
+bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTrace>* out) {
   fact::app::LogDecoder dec(kApp);
   const std::string why = fact::app::for_each_log_event(path, [&](const lcm::LogEvent& e) {
-    if (e.channel.rfind(result_prefix, 0) == 0) {
+    if (e.channel.rfind(ch.result_prefix, 0) == 0) {
       fact::swarm_result_t m;
       if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
@@ -58,10 +75,16 @@ bool read_log(const std::string& path, const std::string& result_prefix, const s
       t.last_status = m.status;
       t.last_reason = m.reason;
       t.last_rounds = m.rounds_used;
-    } else if (e.channel == status_channel) {
+    } else if (e.channel.rfind(ch.rounds_prefix, 0) == 0) {
+      fact::swarm_rounds_t m;
+      if (dec.decode(e, &m)) ++(*out)[m.drone_id].rounds_recorded;
+    } else if (e.channel == ch.status) {
       fact::app_status_t m;
-      if (!dec.decode(e, &m) || m.app != "fact-planner") return;
+      if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
+      if (m.app == "fact-solver") t.results_published = std::max(t.results_published, counter(m, "results_published"));
+      if (m.app == "fact-gossip") t.rounds_published = std::max(t.rounds_published, counter(m, "swarm_rounds_published"));
+      if (m.app != "fact-planner") return;
       const std::string d = decision(m.state);
       if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
       if (!d.empty()) t.planner_final = m.state;
@@ -69,6 +92,23 @@ bool read_log(const std::string& path, const std::string& result_prefix, const s
   });
   if (!why.empty()) std::cerr << kApp << ": error: " << why << "\n";
   return why.empty();
+}
+
+// Errors for each drone of log whose recorded results or rounds are fewer than its apps published.
+std::vector<std::string> lost_messages(const std::string& path, const std::map<int, DroneTrace>& log,
+                                       const Channels& ch) {
+  std::vector<std::string> lost;
+  for (const auto& [id, t] : log) {
+    const auto say = [&](size_t recorded, int64_t published, const std::string& channel, const char* app) {
+      if (static_cast<int64_t>(recorded) >= published) return;
+      lost.push_back(path + ": drone " + std::to_string(id) + ": " + std::to_string(recorded) + " message(s) on " +
+                     channel + std::to_string(id) + " but its " + app + " published " + std::to_string(published) +
+                     " (FACT_STATUS counter): the recorder lost messages, a replay cannot match");
+    };
+    say(t.result_bytes.size(), t.results_published, ch.result_prefix, "fact-solver");
+    say(static_cast<size_t>(t.rounds_recorded), t.rounds_published, ch.rounds_prefix, "fact-gossip");
+  }
+  return lost;
 }
 
 std::string join(const std::vector<std::string>& v) {
@@ -80,7 +120,8 @@ std::string join(const std::vector<std::string>& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string original, replay, result_channel = "FACT_RESULT", status_channel = "FACT_STATUS";
+  std::string original, replay, result_channel = "FACT_RESULT", rounds_channel = "FACT_SWARM_ROUNDS",
+                             status_channel = "FACT_STATUS";
   std::vector<int> drones;
   bool no_planner = false;
   CLI::App cli{"fact-log-compare: checks that a replay matches the recorded run: solver results byte for byte,\n"
@@ -91,17 +132,26 @@ int main(int argc, char** argv) {
   cli.add_option("--drones", drones, "Drone ids to compare (default: every drone with a result in the original)")
       ->delimiter(',');
   cli.add_option("--result-channel", result_channel, "Result channel base (+ _<id>)")->capture_default_str();
-  cli.add_option("--status-channel", status_channel, "Status channel (the planners' decisions)")->capture_default_str();
+  cli.add_option("--rounds-channel", rounds_channel, "Complete-rounds channel base (+ _<id>), counted against fact-gossip's status")
+      ->capture_default_str();
+  cli.add_option("--status-channel", status_channel, "Status channel (the planners' decisions, the apps' counters)")
+      ->capture_default_str();
   cli.add_flag("--no-planner", no_planner, "Compare the results only");
-  cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result.");
+  cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
+             "that lost messages (fewer results or rounds of a drone than its apps' status counters say they published).");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;
   }
+  const Channels ch{result_channel + "_", rounds_channel + "_", status_channel};
   std::map<int, DroneTrace> a, b;
-  if (!read_log(original, result_channel + "_", status_channel, &a) || !read_log(replay, result_channel + "_", status_channel, &b))
-    return 2;
+  if (!read_log(original, ch, &a) || !read_log(replay, ch, &b)) return 2;
+  std::vector<std::string> lost = lost_messages(original, a, ch);
+  if (replay != original)
+    for (const std::string& e : lost_messages(replay, b, ch)) lost.push_back(e);
+  for (const std::string& e : lost) std::cerr << kApp << ": error: " << e << "\n";
+  if (!lost.empty()) return 2;
   if (drones.empty())
     for (const auto& [id, t] : a)
       if (!t.result_bytes.empty()) drones.push_back(id);

@@ -1,0 +1,157 @@
+// fact-log-compare: a replay's log against its recorded run (scripts/replay.sh). The app runs as a
+// process on logs written here with lcm::LogFile from the real lcm-gen types; exit codes and the
+// lines it prints are checked.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "fact/app_status_t.hpp"
+#include "fact/swarm_result_t.hpp"
+#include "fact/swarm_rounds_t.hpp"
+#include "run_command.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Event {
+  int64_t timestamp;
+  std::string channel;
+  std::string data;
+};
+
+template <typename Msg>
+Event event(int64_t timestamp, const std::string& channel, const Msg& m) {
+  std::string data(static_cast<size_t>(m.getEncodedSize()), '\0');
+  m.encode(data.data(), 0, static_cast<int>(data.size()));
+  return {timestamp, channel, data};
+}
+
+fact::swarm_result_t result(int drone, int64_t utime, int rounds, const std::string& status) {
+  fact::swarm_result_t m{};
+  m.utime = utime;
+  m.drone_id = drone;
+  m.mode = "associated";
+  m.status = status;
+  m.rounds_used = rounds;
+  m.num_drones = 0;
+  return m;
+}
+
+fact::swarm_rounds_t rounds(int drone, int64_t utime, int complete) {
+  fact::swarm_rounds_t m{};
+  m.utime = utime;
+  m.drone_id = drone;
+  m.complete_rounds = complete;
+  return m;
+}
+
+fact::app_status_t status(int drone, const std::string& app, const std::string& state, const std::string& counter,
+                          int64_t value) {
+  fact::app_status_t m{};
+  m.drone_id = drone;
+  m.app = app;
+  m.state = state;
+  m.num_counters = 1;
+  m.counter_names = {counter};
+  m.counter_values = {value};
+  return m;
+}
+
+void write_log(const fs::path& path, const std::vector<Event>& events) {
+  lcm::LogFile log(path.string(), "w");
+  ASSERT_TRUE(log.good()) << path;
+  for (const Event& e : events) {
+    lcm::LogEvent le;
+    le.eventnum = 0;
+    le.timestamp = e.timestamp;
+    le.channel = e.channel;
+    le.datalen = static_cast<int32_t>(e.data.size());
+    le.data = const_cast<char*>(e.data.data());
+    ASSERT_EQ(log.writeEvent(&le), 0);
+  }
+}
+
+// Drone 0's run: two complete rounds from its gossip, two results from its solver, the planner's
+// decisions, and each app's counters. Without result_1 (or rounds_1) it is a log that lost them.
+std::vector<Event> run_of_drone_0(bool with_result_1 = true, bool with_rounds_1 = true) {
+  std::vector<Event> v;
+  if (with_rounds_1) v.push_back(event(10, "FACT_SWARM_ROUNDS_0", rounds(0, 10, 1)));
+  if (with_result_1) v.push_back(event(11, "FACT_RESULT_0", result(0, 10, 1, "ambiguous")));
+  v.push_back(event(12, "FACT_STATUS", status(0, "fact-planner", "move round 1: ambiguous", "x", 0)));
+  v.push_back(event(20, "FACT_SWARM_ROUNDS_0", rounds(0, 20, 2)));
+  v.push_back(event(21, "FACT_RESULT_0", result(0, 20, 2, "certified")));
+  v.push_back(event(22, "FACT_STATUS", status(0, "fact-planner", "done round 2: certified", "x", 0)));
+  v.push_back(event(30, "FACT_STATUS", status(0, "fact-solver", "running", "results_published", 2)));
+  v.push_back(event(31, "FACT_STATUS", status(0, "fact-gossip", "running", "swarm_rounds_published", 2)));
+  return v;
+}
+
+using fact::test::Ran;
+
+class LogCompare : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "fact-log-compare-XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  Ran compare(const std::vector<Event>& original, const std::vector<Event>& replay, const std::string& flags = "") {
+    write_log(dir_ / "run.lcm", original);
+    write_log(dir_ / "replay.lcm", replay);
+    return fact::test::run_command(std::string(FACT_LOG_COMPARE_BINARY) + " " + (dir_ / "run.lcm").string() + " " +
+                                   (dir_ / "replay.lcm").string() + " " + flags);
+  }
+  fs::path dir_;
+};
+
+TEST_F(LogCompare, SameResultsAndDecisionsMatch) {
+  const Ran r = compare(run_of_drone_0(), run_of_drone_0());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("== the replay matches the recorded run"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("move round 1 → done round 2"), std::string::npos) << r.out;
+}
+
+TEST_F(LogCompare, DifferentDecisionsDiffer) {
+  std::vector<Event> replay = run_of_drone_0();
+  replay[2] = event(12, "FACT_STATUS", status(0, "fact-planner", "spin round 1: spin", "x", 0));
+  const Ran r = compare(run_of_drone_0(), replay);
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("DIFFERENT"), std::string::npos) << r.out;
+}
+
+// A recorder that missed a result or a round the apps published (their FACT_STATUS counters say
+// how many): exit 2, naming the log, the drone, the channel and both counts, whichever log it is.
+TEST_F(LogCompare, LogThatLostAResultIsRefused) {
+  const Ran r = compare(run_of_drone_0(false), run_of_drone_0());
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("run.lcm: drone 0: 1 message(s) on FACT_RESULT_0 but its fact-solver published 2"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("== the replay"), std::string::npos) << r.out;
+}
+
+TEST_F(LogCompare, LogThatLostARoundIsRefused) {
+  const Ran r = compare(run_of_drone_0(), run_of_drone_0(true, false), "--no-planner");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("replay.lcm: drone 0: 1 message(s) on FACT_SWARM_ROUNDS_0 but its fact-gossip published 2"),
+            std::string::npos)
+      << r.out;
+}
+
+// Without the apps' counters (a log recorded by other tools) nothing can be said to be lost.
+TEST_F(LogCompare, NoCountersNoCheck) {
+  std::vector<Event> original = run_of_drone_0(false);
+  original.resize(original.size() - 2);  // drop the solver's and the gossip's status
+  std::vector<Event> replay = run_of_drone_0();
+  replay.resize(replay.size() - 2);
+  const Ran r = compare(original, replay, "--no-planner");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("1 replay results for inputs the recording missed"), std::string::npos) << r.out;
+}
+
+}  // namespace
