@@ -39,8 +39,15 @@ void bound_from_spectrum(Certificate& cert) {
   // ⟨C, X⟩ = tr Λ + ⟨S, X⟩ ≥ tr Λ + λ_min(S)·tr X for every feasible X, and tr X = n.
   const Eigen::Index n = cert.eigenvalues.size();
   cert.dual_bound = cert.trace_lambda + static_cast<double>(n) * std::min(0.0, cert.min_eig);
-  // The computed λ_min may lie above the exact one by the eigensolver's backward error e.
-  cert.bound_error = static_cast<double>(n) * eigensolver_error(n, cert.eigenvalues.cwiseAbs().maxCoeff());
+  // What rounding can have moved it by: n·e, e the eigensolver's backward error on λ_min; the
+  // sum tr Λ (n terms, (n + 2)ε relative to Σ|Λ_jj| with n·|λ_min| added); and C's scaling, ε
+  // per entry of the scaled C (|X_jk| ≤ 1 on the feasible set, Σ|C_jk| ≤ n‖C‖_F = n).
+  const double eps = std::numeric_limits<double>::epsilon(), dn = static_cast<double>(n);
+  double abs_trace = 0;  // Σ_j |Λ_jj|
+  for (Eigen::Index i = 0; i < cert.lambda.rows(); i += cert.lambda.cols())
+    abs_trace += cert.lambda.middleRows(i, cert.lambda.cols()).diagonal().cwiseAbs().sum();
+  cert.bound_error = dn * eigensolver_error(n, cert.eigenvalues.cwiseAbs().maxCoeff()) +
+                     (dn + 2) * eps * (abs_trace + dn * std::abs(std::min(0.0, cert.min_eig))) + dn * eps;
 }
 
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector) {

@@ -27,8 +27,8 @@ struct Certificate {
   double trace_lambda = 0;    // tr Λ: the dual objective
   double min_eig = 0;         // λ_min(S)
   double dual_bound = 0;      // tr Λ + n·min(0, λ_min(S)): a lower bound on the optimum
-  double bound_error = 0;     // n·e, e the eigensolver's error bound: dual_bound − bound_error is
-                              // a lower bound even if the computed λ_min(S) is e too high
+  double bound_error = 0;     // what rounding can have raised dual_bound by (bound_from_spectrum):
+                              // the eigensolver's error on λ_min(S) (n·e), tr Λ's sum, C's scaling
 };
 
 // Λ from a primal factor Y (n × r) whose d×d diagonal blocks of Y Yᵀ are I.

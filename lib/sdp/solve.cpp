@@ -551,7 +551,8 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.Lambda = best.cert.lambda * r.scale;
   r.objective = primal * r.scale;
   r.dual_bound = best.cert.dual_bound * r.scale;
-  r.bound_error = best.cert.bound_error * r.scale;
+  // (the product with the scale rounds once more)
+  r.bound_error = best.cert.bound_error * r.scale + 2 * std::numeric_limits<double>::epsilon() * std::abs(r.dual_bound);
   r.rel_gap = relative_gap(primal, best.cert.dual_bound);
   r.min_eig_S = best.cert.min_eig;
   r.rank = rank;

@@ -67,9 +67,12 @@ struct Result {
   // Dual certificate: Λ_ii stacked vertically, n × d (block i is rows d·i … d·i+d−1).
   Eigen::MatrixXd Lambda;
   double objective = 0;      // ⟨C, X⟩ (unscaled)
-  double dual_bound = 0;     // tr Λ + n·min(0, λ_min(S)) (unscaled): ⟨C, X⟩ ≥ it for every feasible X
-  double bound_error = 0;    // n·e (unscaled), e = 4nε‖S‖₂ the eigensolver's error bound on λ_min(S):
-                             // dual_bound − bound_error holds even allowing for that error
+  double dual_bound = 0;     // tr Λ + n·min(0, λ_min(S)) (unscaled), λ_min(S) as computed: in exact
+                             // arithmetic ⟨C, X⟩ ≥ it for every feasible X
+  double bound_error = 0;    // (unscaled) what floating point can have raised dual_bound by: n·e with
+                             // e = 4nε‖S‖₂ the eigensolver's error bound on λ_min(S), plus the rounding
+                             // of tr Λ and of C's scaling; ⟨C, X⟩ ≥ dual_bound − bound_error for
+                             // every feasible X
   double rel_gap = 0;        // (objective − dual_bound) / max(1e-4, |objective|, |dual_bound|), scaled problem
   double min_eig_S = 0;      // λ_min(S), S = C/‖C‖_F − Λ/‖C‖_F (scaled)
   double eig_gap = 0;        // λ_{d+1}(S) (scaled): > null_tol means nullity ≤ d
