@@ -26,7 +26,7 @@
 # --no-build.
 # Exit codes: 0 the replay matches; 1 it differs (the table says what); 2 bad input (unreadable
 # log, no result in it, a drone id without a result, a log that lost messages — fewer results or
-# complete rounds of a drone than its apps' FACT_STATUS counters say they published — bad flags);
+# complete rounds of a drone than its apps' FACT_STATUS counters grew by in it — bad flags);
 # 125 no private namespace.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

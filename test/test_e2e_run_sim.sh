@@ -5,7 +5,9 @@
 # the swarm's certified result against the simulator's ground truth. Passes when run-sim.sh exits
 # 0 (certified, every drone's frame within the bounds below) and it wrote the log, the picture and
 # a report whose numbers agree with the bounds; then scripts/replay.sh replays the log into fresh
-# solvers and planners and must show the same results and decisions.
+# solvers and planners and must show the same results and decisions. A recording that lost UDP
+# messages (replay.sh refuses it, naming them) cannot show that: then the run is made once more,
+# and the test fails if that one is incomplete too.
 #
 #   test/test_e2e_run_sim.sh REPO BUILD_DIR OUT_DIR
 #

@@ -9,9 +9,11 @@
 //
 // Prints one table row per drone. Exit codes: 0 everything matches; 1 something differs (the row
 // says what); 2 bad flags, an unreadable log, no result in the original, or a log that lost
-// messages: one holding fewer results (or complete rounds) of a drone than its fact-solver (or
-// fact-gossip) counted as published in its FACT_STATUS heartbeats (results_published,
-// swarm_rounds_published) — a recorder that missed UDP messages, which no replay can match.
+// messages: one holding fewer results (or complete rounds) of a compared drone, between two of
+// its fact-solver's (or fact-gossip's) FACT_STATUS heartbeats, than the app's counter
+// (results_published, swarm_rounds_published) grew by — a recorder that missed UDP messages,
+// which no replay can match. (The app publishes a message before the heartbeat that counts it,
+// on the same bus, so one recorder sees them in that order.)
 #include "common/app.h"
 #include "common/log_reader.h"
 
@@ -38,16 +40,36 @@ struct DroneTrace {
   int last_rounds = 0;
   std::vector<std::string> planner_states;  // "<phase> round <k>", consecutive repeats dropped
   std::string planner_final;                // the last full state string
-  int rounds_recorded = 0;                  // FACT_SWARM_ROUNDS_<id> messages in the log
-  int64_t results_published = 0;            // fact-solver's largest results_published counter
-  int64_t rounds_published = 0;             // fact-gossip's largest swarm_rounds_published counter
+  // Messages of one channel against the publishing app's counter, from its first heartbeat in
+  // the log on (a log may start after the app did).
+  struct Tally {
+    bool counting = false;  // a heartbeat with the counter was seen
+    int64_t first = 0;      // the counter at the first heartbeat
+    int64_t recorded = 0;   // messages in the log since that heartbeat
+    int64_t published = 0;  // the counter's growth since then, at the latest heartbeat
+    int64_t lost = 0;       // the largest shortfall of recorded against published at a heartbeat
+    void message() { recorded += counting; }
+    void heartbeat(int64_t counter) {
+      if (!counting) {
+        counting = true;
+        first = counter;
+        return;
+      }
+      published = counter - first;
+      lost = std::max(lost, published - recorded);
+    }
+  };
+  Tally results, rounds;  // FACT_RESULT_<id> against fact-solver, FACT_SWARM_ROUNDS_<id> against fact-gossip
 };
 
-// The largest value of counter name in m (0 when m has none).
-int64_t counter(const fact::app_status_t& m, const std::string& name) {
+// The value of counter name in m; false when m has none.
+bool counter(const fact::app_status_t& m, const std::string& name, int64_t* value) {
   for (int i = 0; i < m.num_counters; ++i)
-    if (m.counter_names[i] == name) return m.counter_values[i];
-  return 0;
+    if (m.counter_names[i] == name) {
+      *value = m.counter_values[i];
+      return true;
+    }
+  return false;
 }
 
 // "spin round 1: spin 2π ..." → "spin round 1". Not decisions (""): hovers ("hover: odometry
@@ -70,6 +92,7 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
       fact::swarm_result_t m;
       if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
+      t.results.message();
       t.result_bytes.emplace_back(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
       t.by_utime[m.utime] = t.result_bytes.back();
       t.last_status = m.status;
@@ -77,13 +100,14 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
       t.last_rounds = m.rounds_used;
     } else if (e.channel.rfind(ch.rounds_prefix, 0) == 0) {
       fact::swarm_rounds_t m;
-      if (dec.decode(e, &m)) ++(*out)[m.drone_id].rounds_recorded;
+      if (dec.decode(e, &m)) (*out)[m.drone_id].rounds.message();
     } else if (e.channel == ch.status) {
       fact::app_status_t m;
       if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
-      if (m.app == "fact-solver") t.results_published = std::max(t.results_published, counter(m, "results_published"));
-      if (m.app == "fact-gossip") t.rounds_published = std::max(t.rounds_published, counter(m, "swarm_rounds_published"));
+      int64_t value = 0;
+      if (m.app == "fact-solver" && counter(m, "results_published", &value)) t.results.heartbeat(value);
+      if (m.app == "fact-gossip" && counter(m, "swarm_rounds_published", &value)) t.rounds.heartbeat(value);
       if (m.app != "fact-planner") return;
       const std::string d = decision(m.state);
       if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
@@ -94,19 +118,20 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
   return why.empty();
 }
 
-// Errors for each drone of log whose recorded results or rounds are fewer than its apps published.
-std::vector<std::string> lost_messages(const std::string& path, const std::map<int, DroneTrace>& log,
-                                       const Channels& ch) {
+// Errors for each of drones whose results or rounds in log fall short of what its apps counted.
+std::vector<std::string> lost_messages(const std::string& path, std::map<int, DroneTrace>& log,
+                                       const std::vector<int>& drones, const Channels& ch) {
   std::vector<std::string> lost;
-  for (const auto& [id, t] : log) {
-    const auto say = [&](size_t recorded, int64_t published, const std::string& channel, const char* app) {
-      if (static_cast<int64_t>(recorded) >= published) return;
-      lost.push_back(path + ": drone " + std::to_string(id) + ": " + std::to_string(recorded) + " message(s) on " +
-                     channel + std::to_string(id) + " but its " + app + " published " + std::to_string(published) +
-                     " (FACT_STATUS counter): the recorder lost messages, a replay cannot match");
+  for (int id : drones) {
+    const auto say = [&](const DroneTrace::Tally& t, const std::string& channel, const char* app, const char* name) {
+      if (t.lost <= 0) return;
+      lost.push_back(path + ": drone " + std::to_string(id) + ": " + channel + std::to_string(id) + " lacks " +
+                     std::to_string(t.lost) + " message(s): " + app + " counted " + std::to_string(t.published) +
+                     " published (" + name + ", from its first to its last FACT_STATUS in the log), the log holds " +
+                     std::to_string(t.recorded) + ": the recorder lost messages, a replay cannot match");
     };
-    say(t.result_bytes.size(), t.results_published, ch.result_prefix, "fact-solver");
-    say(static_cast<size_t>(t.rounds_recorded), t.rounds_published, ch.rounds_prefix, "fact-gossip");
+    say(log[id].results, ch.result_prefix, "fact-solver", "results_published");
+    say(log[id].rounds, ch.rounds_prefix, "fact-gossip", "swarm_rounds_published");
   }
   return lost;
 }
@@ -138,7 +163,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cli.add_flag("--no-planner", no_planner, "Compare the results only");
   cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
-             "that lost messages (fewer results or rounds of a drone than its apps' status counters say they published).");
+             "that lost messages (fewer results or rounds of a compared drone than its apps' status counters grew by in it).");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -147,11 +172,6 @@ int main(int argc, char** argv) {
   const Channels ch{result_channel + "_", rounds_channel + "_", status_channel};
   std::map<int, DroneTrace> a, b;
   if (!read_log(original, ch, &a) || !read_log(replay, ch, &b)) return 2;
-  std::vector<std::string> lost = lost_messages(original, a, ch);
-  if (replay != original)
-    for (const std::string& e : lost_messages(replay, b, ch)) lost.push_back(e);
-  for (const std::string& e : lost) std::cerr << kApp << ": error: " << e << "\n";
-  if (!lost.empty()) return 2;
   if (drones.empty())
     for (const auto& [id, t] : a)
       if (!t.result_bytes.empty()) drones.push_back(id);
@@ -159,6 +179,11 @@ int main(int argc, char** argv) {
     std::cerr << kApp << ": error: no result on " << result_channel << "_<id> in " << original << "\n";
     return 2;
   }
+  std::vector<std::string> lost = lost_messages(original, a, drones, ch);
+  if (replay != original)
+    for (const std::string& e : lost_messages(replay, b, drones, ch)) lost.push_back(e);
+  for (const std::string& e : lost) std::cerr << kApp << ": error: " << e << "\n";
+  if (!lost.empty()) return 2;
   bool all = true;
   std::printf("drone  results orig/replay  identical  last result            planner decisions\n");
   for (int id : drones) {
