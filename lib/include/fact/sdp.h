@@ -46,7 +46,9 @@ const char* to_string(Method m);
 
 struct Options {
   Method method = Method::automatic;
-  double gap_tol = 1e-9;     // largest relative duality gap that certifies (problem scaled to ‖C‖_F = 1)
+  double gap_tol = 1e-9;     // largest relative duality gap that certifies (problem scaled to ‖C‖_F = 1);
+                             // a gap within bound_error (the bound's rounding) certifies too, and the
+                             // reason says so
   double psd_tol = 1e-9;     // λ_min(S) ≥ −psd_tol (scaled problem) counts as S ⪰ 0
   double null_tol = 1e-10;   // eigenvalues of scaled S below this count toward the nullity
   int max_sweeps = 10;       // block-coordinate sweeps after each staircase escape, before Newton
