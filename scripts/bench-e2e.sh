@@ -7,7 +7,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/bench.sh"
 bench_build fact-bench-e2e fact-sim fact-detector fact-vio-relay fact-gossip \
-  fact-solver fact-planner fact-fc-bridge fact-run-report
+  fact-solver fact-planner fact-fc-bridge fact-run-report fact-log-merge fact-log-compare
 cd "$here"
 bench_args "$build/bench/fact-bench-e2e" "$@"
 start=$(date +%s)

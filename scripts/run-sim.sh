@@ -407,14 +407,15 @@ for _ in $(seq 50); do
   sleep 0.2
 done
 # Datagrams the kernel dropped because a socket's receive buffer was full (Udp RcvbufErrors of
-# /proc/net/snmp), in this namespace (the swarm bus's recorder, the simulator) and in each drone's: a recorder or
-# an app that fell behind. Frames a detector drops this way are expected under load; results and
-# rounds a recorder drops make run.lcm incomplete (checked below).
-rcvbuf_errors() {  # rcvbuf_errors ID (-1: this namespace)
+# /proc/net/snmp), in this namespace (the swarm bus's recorder, the simulator) and in each
+# drone's: a recorder or an app that fell behind. Frames a detector drops this way are expected
+# under load; results and rounds a recorder drops make run.lcm incomplete (checked below).
+rcvbuf_errors() {  # rcvbuf_errors ID (-1: this namespace); "?" when the counters cannot be read
   local pre
   read -r -a pre <<<"$(ns_prefix "$1")"
-  "${pre[@]}" cat /proc/net/snmp 2>/dev/null |
-    awk '$1 == "Udp:" { if (!n) { for (i = 2; i <= NF; ++i) if ($i == "RcvbufErrors") c = i; n = 1 } else print $c + 0 }'
+  { "${pre[@]}" cat /proc/net/snmp 2>/dev/null || echo "Udp: ?"; } |
+    awk '$1 == "Udp:" { if (!n) { for (i = 2; i <= NF; ++i) if ($i == "RcvbufErrors") c = i; n = 1 } else { v = c ? $c + 0 : "?" } }
+         END { print v == "" ? "?" : v }'
 }
 if [ "$FACT_RUN_SIM_INNER" = netns ]; then
   drops="bridge namespace: $(rcvbuf_errors -1)"

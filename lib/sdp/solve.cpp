@@ -119,18 +119,18 @@ double feasibility_error(const Eigen::MatrixXd& Y, int d) {
 // A candidate's X counts as feasible within this (its objective and certificate assume X_ii = I).
 constexpr double kFeasibilityTol = 1e-8;
 
-// (A candidate without a factor, from a method that found no point, or whose X is not feasible,
-// is never certified: an independent review found rank-1 blocks from the closed-form polar factor
-// certified with X_ii off I by 0.7.)
 // The gap closes at a relative gap ≤ gap_tol, or when the absolute gap is within the bound's own
 // rounding (bound_error: the eigensolver's error on λ_min(S), n·4nε‖S‖₂, and tr Λ's sum): then
 // floating point cannot tell the bound from the objective. That decides only on a small optimum
 // (|objective| below about bound_error/gap_tol), where n·|λ_min(S)| at rounding level can exceed
-// gap_tol·1e-4: the zero optimum of plain_noisy N = 250 had a gap of 1.7e-9.
+// gap_tol·1e-4: the zero optimum of plain_noisy N = 250 had a relative gap of 1.2e-9.
 bool gap_closes(const Candidate& c, const Options& o) {
   return relative_gap(c.primal, c.cert.dual_bound) <= o.gap_tol || c.primal - c.cert.dual_bound <= c.cert.bound_error;
 }
 
+// (A candidate without a factor, from a method that found no point, or whose X is not feasible,
+// is never certified: an independent review found rank-1 blocks from the closed-form polar factor
+// certified with X_ii off I by 0.7.)
 bool is_certified(const Candidate& c, const Options& o) {
   return c.Y.size() > 0 && c.cert.min_eig >= -o.psd_tol && gap_closes(c, o) &&
          feasibility_error(c.Y, static_cast<int>(c.cert.lambda.cols() > 0 ? c.cert.lambda.cols() : 1)) <= kFeasibilityTol;
