@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace fact::sdp::detail {
 namespace {
@@ -111,7 +112,10 @@ namespace {
 // Below this size a diagonal block of L is inverted by forward substitution; above it the
 // recursion's matrix products, which Eigen vectorises far better than its triangular solves
 // (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
-constexpr Eigen::Index kInverseBlock = 24;
+// Complex substitution loops are not vectorised, so complex blocks split further: 8 against 24,
+// N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best, BENCHMARKS.md, session 25).
+template <class Scalar>
+constexpr Eigen::Index kInverseBlock = std::is_same_v<Scalar, double> ? 24 : 8;
 
 // L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
 // zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products that
@@ -121,7 +125,7 @@ template <class Scalar>
 void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> L,
                   Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> inverse) {
   const Eigen::Index n = L.rows();
-  if (n <= kInverseBlock) {
+  if (n <= kInverseBlock<Scalar>) {
     inverse.setZero();
     for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j, by columns of L
       Scalar* x = &inverse(0, j);
