@@ -1034,13 +1034,9 @@ TEST(SdpReview, DualBoundIsNotRaisedByTheEigensolverTolerance) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The paper's plain cost for 250 drones with N + 1 rounds has a zero optimum on C's null space
-// (n = 500). Its bound n·min(0, λ_min(C)) sits at rounding level, 1.2e-9 of the gap's floor, above
-// gap_tol: it was not certified (the interior point ran 827 ms and did not either) once the bound
+// (n = 500). Its bound n·min(0, λ_min(C)) sits at rounding level, a relative gap of 1.2e-9 against
+// the gap's floor, above gap_tol: it was not certified (the interior point ran 827 ms and did not either) once the bound
 // stopped forgiving λ_min. The gap is within bound_error, and that certifies, saying so.
 TEST(SdpReview, GapWithinTheBoundsRoundingCertifies) {
   fact::SyntheticOptions o;  // as fact-bench-sdp's plain_noisy at N = 250
