@@ -36,14 +36,20 @@ double gershgorin_radius(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
   return radius;
 }
 
+// Lanczos steps of the corrector's estimate (n > kExactStepMaxSize). 12 against 24: the same
+// statuses, random full-rank C N = 25 / 32 / 48 / 64 0.81 / 0.84 / 0.90 / 0.91 of the time and the
+// paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150 0.83–0.93); 8 was as fast on average but
+// had a 1.27× outlier (BENCHMARKS.md, session 25). The complex interior point takes 8.
+constexpr int kCorrectorLanczosSteps = 12;
+
 // The smallest eigenvalue of L⁻¹ Δ L⁻ᵀ estimated by Lanczos (full reorthogonalisation): 8 steps
-// for the predictor (τ = 1), 24 for the corrector. apply_delta(u, w) writes w = Δ u. Ritz values
-// lie inside the spectrum, so the corrector's step is confirmed by a Cholesky test.
+// for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector. apply_delta(u, w) writes
+// w = Δ u. Ritz values lie inside the spectrum, so the corrector's step is confirmed by a Cholesky test.
 template <class ApplyDelta>
 double lanczos_min_eig(const Eigen::MatrixXd& L, double tau, ApplyDelta apply_delta) {
   const auto lower = L.triangularView<Eigen::Lower>();
   Eigen::VectorXd u(L.rows());
-  return lanczos_lowest<Eigen::VectorXd>(L.rows(), tau >= 1.0 ? 8 : 24, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+  return lanczos_lowest<Eigen::VectorXd>(L.rows(), tau >= 1.0 ? 8 : kCorrectorLanczosSteps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
     u = lower.transpose().solve(v);  // L⁻ᵀ v
     apply_delta(u, w);
     lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v

@@ -13,7 +13,7 @@
 namespace fact::sdp::detail {
 
 // Largest n for which the corrector's step length is computed exactly (tridiagonalisation,
-// O(n³)); above it a 24-step Lanczos estimate is verified by Cholesky tests.
+// O(n³)); above it a 12-step Lanczos estimate is verified by Cholesky tests.
 constexpr int kExactStepMaxSize = 48;
 // From this n on, the predictor's step (τ = 1, it only sets the centring σ) is an 8-step Lanczos
 // estimate, O(n²) a step, at any n: the same iterations (or one fewer) on the benchmark's plain
@@ -28,7 +28,7 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
 // triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
-// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks, forward substitution below.
+// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex), forward substitution below.
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
