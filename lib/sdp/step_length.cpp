@@ -41,15 +41,23 @@ double gershgorin_radius(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
 // paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150 0.83–0.93); 8 was as fast on average but
 // had a 1.27× outlier (BENCHMARKS.md, session 25). The complex interior point takes 8.
 constexpr int kCorrectorLanczosSteps = 12;
+// Lanczos steps of the predictor's estimate (it only sets σ): 4 up to n = 64, 8 above. With 4
+// instead of 8 at N = 12 / 16 / 24 / 32 (n = 24 … 64): random full rank 0.85 / 0.91 / 0.94 / 0.97
+// of the time, the paper's cost with 2N rounds 0.88 / 0.90 / 0.94 / 1.00, plain N = 12 0.80, no
+// status changes; but 21 of 200 instances took an iteration more, and from N = 100 that costs
+// more than the steps save (full rank N = 100 25.9 → 27.4 ms; BENCHMARKS.md, session 25).
+constexpr int kShortPredictorMaxSize = 64;
+int predictor_lanczos_steps(Eigen::Index n) { return n <= kShortPredictorMaxSize ? 4 : 8; }
 
-// The smallest eigenvalue of L⁻¹ Δ L⁻ᵀ estimated by Lanczos (full reorthogonalisation): 8 steps
-// for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector. apply_delta(u, w) writes
+// The smallest eigenvalue of L⁻¹ Δ L⁻ᵀ estimated by Lanczos (full reorthogonalisation):
+// predictor_lanczos_steps for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector. apply_delta(u, w) writes
 // w = Δ u. Ritz values lie inside the spectrum, so the corrector's step is confirmed by a Cholesky test.
 template <class ApplyDelta>
 double lanczos_min_eig(const Eigen::MatrixXd& L, double tau, ApplyDelta apply_delta) {
   const auto lower = L.triangularView<Eigen::Lower>();
   Eigen::VectorXd u(L.rows());
-  return lanczos_lowest<Eigen::VectorXd>(L.rows(), tau >= 1.0 ? 8 : kCorrectorLanczosSteps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+  const int steps = tau >= 1.0 ? predictor_lanczos_steps(L.rows()) : kCorrectorLanczosSteps;
+  return lanczos_lowest<Eigen::VectorXd>(L.rows(), steps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
     u = lower.transpose().solve(v);  // L⁻ᵀ v
     apply_delta(u, w);
     lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v

@@ -15,10 +15,11 @@ namespace fact::sdp::detail {
 // Largest n for which the corrector's step length is computed exactly (tridiagonalisation,
 // O(n³)); above it a 12-step Lanczos estimate is verified by Cholesky tests.
 constexpr int kExactStepMaxSize = 48;
-// From this n on, the predictor's step (τ = 1, it only sets the centring σ) is an 8-step Lanczos
-// estimate, O(n²) a step, at any n: the same iterations (or one fewer) on the benchmark's plain
-// and random instances, and 3 / 10 / 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128
-// (plain_noisy; below n = 24 the exact path's plain loops cost less than Eigen's triangular solves).
+// From this n on, the predictor's step (τ = 1, it only sets the centring σ) is a Lanczos estimate,
+// O(n²) a step (4 steps up to n = 64, 8 above; step_length.cpp). With 8 steps, when introduced:
+// the same iterations (or one fewer) on the benchmark's plain and random instances, and 3 / 10 /
+// 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128 (plain_noisy; below n = 24 the
+// exact path's plain loops cost less than Eigen's triangular solves).
 constexpr int kPredictorLanczosMinSize = 24;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
