@@ -38,8 +38,8 @@ double gershgorin_radius(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
 
 // Lanczos steps of the corrector's estimate (n > kExactStepMaxSize). 12 against 24: the same
 // statuses, random full-rank C N = 25 / 32 / 48 / 64 0.81 / 0.84 / 0.90 / 0.91 of the time and the
-// paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150 0.83–0.93); 8 was as fast on average but
-// had a 1.27× outlier (BENCHMARKS.md, session 25). The complex interior point takes 8.
+// paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150: 0.86–0.93 and 0.53–0.93); 8 was as fast
+// on average but had a 1.27× outlier (BENCHMARKS.md, session 25). The complex interior point takes 8.
 constexpr int kCorrectorLanczosSteps = 12;
 // Lanczos steps of the predictor's estimate (it only sets σ): 4 up to n = 64, 8 above. With 4
 // instead of 8 at N = 12 / 16 / 24 / 32 (n = 24 … 64): random full rank 0.85 / 0.91 / 0.94 / 0.97
@@ -50,8 +50,9 @@ constexpr int kShortPredictorMaxSize = 64;
 int predictor_lanczos_steps(Eigen::Index n) { return n <= kShortPredictorMaxSize ? 4 : 8; }
 
 // The smallest eigenvalue of L⁻¹ Δ L⁻ᵀ estimated by Lanczos (full reorthogonalisation):
-// predictor_lanczos_steps for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector. apply_delta(u, w) writes
-// w = Δ u. Ritz values lie inside the spectrum, so the corrector's step is confirmed by a Cholesky test.
+// predictor_lanczos_steps for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector.
+// apply_delta(u, w) writes w = Δ u. Ritz values lie inside the spectrum, so the corrector's step
+// is confirmed by a Cholesky test.
 template <class ApplyDelta>
 double lanczos_min_eig(const Eigen::MatrixXd& L, double tau, ApplyDelta apply_delta) {
   const auto lower = L.triangularView<Eigen::Lower>();

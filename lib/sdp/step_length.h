@@ -29,7 +29,8 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
 // triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
-// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex), forward substitution below.
+// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex), forward
+// substitution below.
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
