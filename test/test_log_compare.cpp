@@ -2,7 +2,6 @@
 // process on logs written here with lcm::LogFile from the real lcm-gen types; exit codes and the
 // lines it prints are checked.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <filesystem>
 #include <string>
@@ -11,17 +10,15 @@
 #include "fact/app_status_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "lcm_log_files.h"
 #include "run_command.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Event {
-  int64_t timestamp;
-  std::string channel;
-  std::string data;
-};
+using Event = fact::test::LoggedEvent;
+using fact::test::write_log;
 
 template <typename Msg>
 Event event(int64_t timestamp, const std::string& channel, const Msg& m) {
@@ -61,20 +58,6 @@ fact::app_status_t status(int drone, const std::string& app, const std::string& 
   return m;
 }
 
-void write_log(const fs::path& path, const std::vector<Event>& events) {
-  lcm::LogFile log(path.string(), "w");
-  ASSERT_TRUE(log.good()) << path;
-  for (const Event& e : events) {
-    lcm::LogEvent le;
-    le.eventnum = 0;
-    le.timestamp = e.timestamp;
-    le.channel = e.channel;
-    le.datalen = static_cast<int32_t>(e.data.size());
-    le.data = const_cast<char*>(e.data.data());
-    ASSERT_EQ(log.writeEvent(&le), 0);
-  }
-}
-
 // Drone `id`'s run: two complete rounds from its gossip, two results from its solver, the planner's
 // decisions, and each app's counters in a heartbeat before and after. Without result_1 (or
 // rounds_1) it is a log that lost them.
@@ -100,21 +83,15 @@ std::vector<Event> run_of_drone_0(bool with_result_1 = true, bool with_rounds_1 
 
 using fact::test::Ran;
 
-class LogCompare : public ::testing::Test {
+class LogCompare : public fact::test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "fact-log-compare-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  LogCompare() : TempDirTest("fact-log-compare") {}
   Ran compare(const std::vector<Event>& original, const std::vector<Event>& replay, const std::string& flags = "") {
     write_log(dir_ / "run.lcm", original);
     write_log(dir_ / "replay.lcm", replay);
     return fact::test::run_command(std::string(FACT_LOG_COMPARE_BINARY) + " " + (dir_ / "run.lcm").string() + " " +
                                    (dir_ / "replay.lcm").string() + " " + flags);
   }
-  fs::path dir_;
 };
 
 TEST_F(LogCompare, SameResultsAndDecisionsMatch) {

@@ -1,60 +1,28 @@
 // fact-log-merge: LCM logs of several buses into one, in timestamp order (scripts/run-sim.sh).
 // The app runs as a process on logs written here with lcm::LogFile; its output is read back.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "lcm_log_files.h"
 #include "run_command.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Event {
-  int64_t timestamp;
-  std::string channel;
-  std::string data;
-};
-
-void write_log(const fs::path& path, const std::vector<Event>& events) {
-  lcm::LogFile log(path.string(), "w");
-  ASSERT_TRUE(log.good()) << path;
-  for (const Event& e : events) {
-    lcm::LogEvent le;
-    le.eventnum = 0;
-    le.timestamp = e.timestamp;
-    le.channel = e.channel;
-    le.datalen = static_cast<int32_t>(e.data.size());
-    le.data = const_cast<char*>(e.data.data());
-    ASSERT_EQ(log.writeEvent(&le), 0);
-  }
-}
-
-std::vector<Event> read_log(const fs::path& path) {
-  std::vector<Event> out;
-  lcm::LogFile log(path.string(), "r");
-  if (!log.good()) return out;
-  for (const lcm::LogEvent* e = log.readNextEvent(); e; e = log.readNextEvent())
-    out.push_back({e->timestamp, e->channel, std::string(static_cast<const char*>(e->data), e->datalen)});
-  return out;
-}
-
+using Event = fact::test::LoggedEvent;
 using fact::test::Ran;
+using fact::test::read_log;
+using fact::test::write_log;
 
 Ran merge(const std::string& args) { return fact::test::run_command(std::string(FACT_LOG_MERGE_BINARY) + " " + args); }
 
-class LogMerge : public ::testing::Test {
+class LogMerge : public fact::test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "fact-log-merge-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  LogMerge() : TempDirTest("fact-log-merge") {}
 };
 
 // Three buses, interleaved in time, one timestamp shared by two of them: every event once, in
