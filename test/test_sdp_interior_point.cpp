@@ -6,7 +6,8 @@
 // (the N × N Hermitian form of a complex-form cost) is checked against the real one. The
 // triangular kernels of every iteration (L⁻¹ and Z⁻¹ = L⁻ᴴ L⁻¹ by recursive blocks) are checked
 // against dense products, across their blocking thresholds, and Newton's system in Schur form
-// against the one in tangent bases.
+// against the one in tangent bases. The crawl watch that ends the rank-2 attempt above 48 rows is
+// checked on given costs and on random C of full and of low rank.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -321,6 +322,59 @@ TEST(SdpNewton, SchurFormTakesTheTangentBasisStep) {
         EXPECT_NEAR(f_schur, f_dense, 1e-12 * std::max(1.0, std::abs(f_dense)));
       }
       EXPECT_NEAR(f_schur, r.objective / r.scale, 1e-9 * std::max(1e-4, std::abs(f_schur)) + 2 * size * size);
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// CrawlWatch on given costs: it stops from step 6 on, once f has fallen by less than the asked
+// fraction of itself over 3 steps while the gradient is above 1e-4; never with decrease 0.
+TEST(SdpNewton, CrawlWatchStopsOnlyASlowRunWithALargeGradient) {
+  using fact::sdp::detail::CrawlWatch;
+  const auto first_stop = [](double decrease, double rate, double grad) {
+    CrawlWatch watch(decrease);
+    double f = 1.0;
+    for (int step = 0; step < 40; ++step, f *= rate)
+      if (watch.crawls(step, f, grad)) return step;
+    return -1;
+  };
+  EXPECT_EQ(first_stop(0.1, 0.98, 1e-2), 6);   // 6 % in 3 steps: crawls at the first step it may stop
+  EXPECT_EQ(first_stop(0.1, 0.9, 1e-2), -1);   // 27 % in 3 steps: converging
+  EXPECT_EQ(first_stop(0.1, 0.98, 1e-5), -1);  // small gradient: near a critical point, let it converge
+  EXPECT_EQ(first_stop(0.0, 1.0, 1e-2), -1);   // no watch
+  EXPECT_EQ(first_stop(0.1, 0.95, 1e-2), -1);  // 14 % in 3 steps, 17 % of the current f
+  EXPECT_EQ(first_stop(0.3, 0.95, 1e-2), 6);   // a larger fraction stops it
+}
+
+// The automatic mode's rank-2 attempt above 48 rows (random C, N = 32, scaled to ‖C‖_F = 1):
+// on C of full rank, whose optimum has a higher rank, it crawls and the watch ends it well before
+// its 25 steps without changing what it certifies (nothing); on C of rank 3, whose zero optimum
+// has rank 2, it is not stopped and certifies in the same steps.
+TEST(SdpNewton, RankTwoAttemptStopsCrawlingOnFullRankButNotOnLowRank) {
+  std::mt19937 rng(31);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Options rank_two;
+  rank_two.method = fact::sdp::Method::low_rank;
+  rank_two.max_rank = 2;
+  rank_two.max_newton_iterations = 25;
+  for (int columns : {64, 3}) {
+    SCOPED_TRACE("C = B Bᵀ, B 64 × " + std::to_string(columns));
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(64, columns, rng, gauss);
+    const Eigen::MatrixXd C = B * B.transpose() / (B * B.transpose()).norm();
+    const auto unwatched = fact::sdp::detail::solve_low_rank(C, 2, rank_two);
+    const auto watched = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1);
+    EXPECT_EQ(watched.certified, unwatched.certified);
+    if (columns == 64) {
+      EXPECT_FALSE(unwatched.certified);
+      EXPECT_GE(unwatched.iterations, 15) << "watched: " << watched.iterations;
+      EXPECT_LE(watched.iterations, 10);
+    } else {
+      EXPECT_TRUE(unwatched.certified);
+      EXPECT_EQ(watched.iterations, unwatched.iterations);
+      EXPECT_LT(unwatched.iterations, 25);
     }
   }
 }

@@ -77,9 +77,34 @@ inline int newton_unknowns(int blocks, int d, int r) {
   return blocks * std::min(d * r - d * (d + 1) / 2, d * (d + 1) / 2);
 }
 
-// Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol. Returns the steps taken.
+// A Newton run that crawls: from step kCrawlMinSteps on, f has fallen by less than
+// `decrease`·|f| over the last kCrawlSpan steps while ‖grad‖ is still above kCrawlGrad. A level
+// whose optimum has a higher rank does that for many steps at a saddle of this rank (random
+// full-rank C, N = 32, rank 2: 19 steps at ‖grad‖ ≈ 2e-2 … 4e-2, f falling 1.5–8 % per 3 steps);
+// one that converges falls faster or reaches a small gradient. decrease = 0 never stops.
+constexpr int kCrawlMinSteps = 6;
+constexpr int kCrawlSpan = 3;
+constexpr double kCrawlGrad = 1e-4;
+class CrawlWatch {
+ public:
+  explicit CrawlWatch(double decrease) : decrease_(decrease) {}
+  // True when the run, at `step` (0, 1, …) with cost f and gradient norm grad_norm, crawls.
+  bool crawls(int step, double f, double grad_norm) {
+    const bool crawling = decrease_ > 0 && step >= kCrawlMinSteps && grad_norm > kCrawlGrad &&
+                          recent_[(step - kCrawlSpan) % (kCrawlSpan + 1)] - f < decrease_ * std::abs(f);
+    recent_[step % (kCrawlSpan + 1)] = f;
+    return crawling;
+  }
+
+ private:
+  double decrease_;
+  double recent_[kCrawlSpan + 1] = {};  // f at the last kCrawlSpan + 1 steps, by step modulo
+};
+
+// Damped Riemannian Newton at fixed rank until ‖grad‖ < grad_tol, or until it crawls (CrawlWatch
+// with crawl_decrease; 0: never). Returns the steps taken.
 int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
-                  NewtonSystem system = NewtonSystem::automatic);
+                  NewtonSystem system = NewtonSystem::automatic, double crawl_decrease = 0);
 
 // One Levenberg–Marquardt-damped Newton step, shared by the real and the complex Newton: H + μI
 // (H: the Hessian in tangent coordinates, restored on return) is factored with μ = damping,
@@ -237,8 +262,9 @@ struct LowRankOutcome {
 };
 
 // Riemannian staircase: block-coordinate minimisation at rank r, certify, and if S has a
-// negative eigenvalue, add a column along its eigenvector and continue, up to max_rank.
-LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options);
+// negative eigenvalue, add a column along its eigenvector and continue, up to max_rank. Each
+// level's Newton run stops early when it crawls (newton_refine's crawl_decrease).
+LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease = 0);
 
 // Below this relative gap both interior points form the primal direction's P Z⁻¹ through Z's
 // Cholesky factor instead of the product P·W: near the optimum W's entries grow as 1/μ and the

@@ -117,7 +117,7 @@ static Eigen::MatrixXd spectral_factor(const Eigen::MatrixXd& C, int d, unsigned
   return Y;
 }
 
-LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options) {
+LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease) {
   const Eigen::Index n = C.rows();
   const int blocks = static_cast<int>(n / d);
   const int max_rank = options.max_rank > 0 ? options.max_rank : std::min<int>(pataki_rank(blocks, d), n);
@@ -125,7 +125,8 @@ LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& op
   out.Y = spectral_factor(C, d, options.seed);
   for (;;) {
     if (out.Y.cols() > d) out.iterations += block_coordinate_sweeps(C, d, out.Y, options.max_sweeps, 1e-3);
-    out.iterations += newton_refine(C, d, out.Y, options.max_newton_iterations, 1e-12);
+    out.iterations +=
+        newton_refine(C, d, out.Y, options.max_newton_iterations, 1e-12, NewtonSystem::automatic, crawl_decrease);
     const Eigen::MatrixXd lambda = lambda_from_factor(C, out.Y, d);
     out.certificate = certify(C, lambda, d, false);
     out.certified = out.certificate.min_eig >= -options.psd_tol;

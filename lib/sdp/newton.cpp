@@ -185,7 +185,8 @@ double trial_step(const Eigen::MatrixXd& C, const Eigen::MatrixXd& Y, int d, int
 }
 
 // Damped Newton with the Hessian formed in the tangent bases (N·t × N·t).
-int dense_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol) {
+int dense_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
+                 CrawlWatch crawl) {
   const Eigen::Index n = C.rows(), r = Y.cols();
   const int blocks = static_cast<int>(n / d), t = static_cast<int>(d * r - d * (d + 1) / 2);
   NewtonWorkspace ws(n, d, r, blocks, t);
@@ -200,7 +201,7 @@ int dense_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_it
     for (int i = 0; i < blocks; ++i)  // gradient coefficients 2⟨B_ia, (S Y)_i⟩
       for (int a = 0; a < t; ++a)
         ws.g[i * t + a] = 2.0 * ws.basis.block(i * d, r * a, d, r).cwiseProduct(ws.SY.middleRows(i * d, d)).sum();
-    if (ws.g.norm() < grad_tol) break;
+    if (ws.g.norm() < grad_tol || crawl.crawls(it, f, ws.g.norm())) break;
     if (d == 1)
       hessian<1>(r, blocks, t, ws);
     else
@@ -285,7 +286,8 @@ bool schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vect
 // Damped Newton in Schur form (schur_trial), with the dense path's damping rule: λ raised 10×
 // while S + λI is not positive definite, M does not factor or the trial raises f by more than
 // rounding, lowered 10× after an accepted step.
-int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol) {
+int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
+                 CrawlWatch crawl) {
   const Eigen::Index n = C.rows(), r = Y.cols();
   const std::vector<Entry> entries = constraint_entries(static_cast<int>(n), d);
   SchurWorkspace ws(n, d, r, static_cast<int>(entries.size()));
@@ -296,7 +298,8 @@ int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_it
   int it = 0;
   for (; it < max_iterations; ++it) {
     certificate_at(C, Y, d, ws.CY, ws.lambda, ws.SY, ws.S);
-    if (2.0 * ws.SY.norm() < grad_tol) break;  // ‖grad f‖ = ‖2 S Y‖ (S Y is tangent)
+    const double grad_norm = 2.0 * ws.SY.norm();  // ‖grad f‖ = ‖2 S Y‖ (S Y is tangent)
+    if (grad_norm < grad_tol || crawl.crawls(it, f, grad_norm)) break;
     ws.X.noalias() = Y * Y.transpose();
     bool accepted = false;
     for (int tries = 0; tries < 12 && !accepted; ++tries, lambda *= 10) {
@@ -318,13 +321,14 @@ int schur_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_it
 }  // namespace
 
 int newton_refine(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_iterations, double grad_tol,
-                  NewtonSystem system) {
+                  NewtonSystem system, double crawl_decrease) {
   const int t = static_cast<int>(d * Y.cols() - d * (d + 1) / 2);  // tangent directions per block
   if (t <= 0) return 0;
   if (system == NewtonSystem::automatic)
     system = t > d * (d + 1) / 2 ? NewtonSystem::schur : NewtonSystem::tangent_basis;
-  if (system == NewtonSystem::schur) return schur_newton(C, d, Y, max_iterations, grad_tol);
-  return dense_newton(C, d, Y, max_iterations, grad_tol);
+  const CrawlWatch crawl(crawl_decrease);
+  if (system == NewtonSystem::schur) return schur_newton(C, d, Y, max_iterations, grad_tol, crawl);
+  return dense_newton(C, d, Y, max_iterations, grad_tol, crawl);
 }
 
 }  // namespace fact::sdp::detail

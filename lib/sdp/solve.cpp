@@ -33,6 +33,14 @@ constexpr double kHandoffGap = 1e-5;
 constexpr int kEarlyPolishSteps = 3;
 // The real interior point starts from the rank-d attempt's factor up to this many rows (below).
 constexpr int kWarmStartMaxRows = 48;
+// Above kWarmStartMaxRows the rank-d attempt stops when it crawls (from_low_rank). Sweep (4 seeds,
+// N = 25 / 32 / 48 / 64, all kinds; fastest of 3, two runs; 0.1 against no stop): random full rank
+// 0.99 / 0.93 / 0.96 / 0.94 of the time, the paper's cost with 2N rounds 0.95 / 0.96 / 0.97 / 0.96,
+// the other kinds unchanged, no status or objective changes; 0.3 and 0.03 gained less. Random C of
+// rank 1 … 50 at N = 25 / 32 / 48 (180 instances): the same methods and statuses. Below, where the
+// attempt's factor starts the interior point, stopping it early gained nothing (N = 5 … 24: 0.97 …
+// 1.06 by kind, one instance 1.46×; BENCHMARKS.md, session 26).
+constexpr double kRankDCrawlDecrease = 0.1;
 
 // The complex staircase in automatic mode climbs while the next rank's Newton system has at most
 // this many unknowns (N·(2p − 1)); beyond it the interior point, handed to complex Newton at a gap
@@ -177,13 +185,17 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // converged within 10 steps on every benchmark instance) for at most 25 steps; a problem
 // that does not certify there goes to the interior point, which measures faster than
 // climbing the staircase on high-rank optima. Up to kStaircaseMaxRows rows (d = 2) it climbs
-// the whole staircase instead, 25 Newton steps a level.
+// the whole staircase instead, 25 Newton steps a level. Above kWarmStartMaxRows rows, where the
+// interior point starts cold and the attempt serves only if it certifies, it stops once it crawls
+// (detail::CrawlWatch, f down by less than kRankDCrawlDecrease of itself in 3 steps).
 Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
+  double crawl_decrease = 0;
   if (o.method == Method::automatic) {
     if (!(d == 2 && C.rows() <= kStaircaseMaxRows)) o.max_rank = d;
     o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
+    if (C.rows() > kWarmStartMaxRows) crawl_decrease = kRankDCrawlDecrease;
   }
-  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o);
+  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o, crawl_decrease);
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
   return with_one_more_step(C, d, std::move(c), o);
