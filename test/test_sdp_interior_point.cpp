@@ -238,6 +238,49 @@ TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
   }
 }
 
+// The step length's last Cholesky test hands over what it factored (StepLength::take_tested), on
+// the exact path (n ≤ 48) and the Lanczos one, for a full and a block-diagonal Δ: the matrix is
+// P + αΔ with the returned α, the factor's L Lᵀ is that matrix, and α stops short of the boundary
+// by about τ = 0.95 (P + 1.01·α/τ·Δ is not definite).
+TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
+  using fact::sdp::detail::StepLength;
+  std::mt19937 rng(29);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {10, 48, 64}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd P = B * B.transpose() / n + 0.1 * Eigen::MatrixXd::Identity(n, n);  // n × n, ≻ 0
+    const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd full = -(G + G.transpose());                                           // n × n symmetric
+    Eigen::MatrixXd blocks = -fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 2, rng, gauss).cwiseAbs();  // n × 2
+    for (int i = 0; i < n; i += 2) blocks(i + 1, 0) = blocks(i, 1);  // symmetric 2 × 2 blocks, stacked
+    Eigen::MatrixXd L = P, L_inv(n, n);
+    ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
+    fact::sdp::detail::invert_lower_factor(L, L_inv);
+    for (bool block_diagonal : {false, true}) {
+      SCOPED_TRACE(block_diagonal ? "block-diagonal Δ" : "full Δ");
+      Eigen::MatrixXd delta = full;  // n × n
+      if (block_diagonal) {
+        delta.setZero();
+        for (int i = 0; i < n; i += 2) delta.block(i, i, 2, 2) = blocks.middleRows(i, 2);
+      }
+      StepLength steps(n);
+      const double alpha = block_diagonal ? steps.block_diagonal(P, L, L_inv, blocks, 2, 0.95)
+                                          : steps.full(P, L, L_inv, delta, 0.95);
+      ASSERT_GT(alpha, 0.0);
+      ASSERT_LT(alpha, 1.0);  // Δ has eigenvalues far below −1 against P's ≥ 0.1: the boundary is near
+      Eigen::MatrixXd next, factor;
+      steps.take_tested(next, factor);
+      const Eigen::MatrixXd expected = P + alpha * delta;
+      EXPECT_LT((next - expected).cwiseAbs().maxCoeff(), 1e-14);
+      const Eigen::MatrixXd lower = factor.triangularView<Eigen::Lower>();
+      EXPECT_LT((lower * lower.transpose() - next).cwiseAbs().maxCoeff(), 1e-12);
+      const Eigen::LLT<Eigen::MatrixXd> beyond(P + 1.01 * alpha / 0.95 * delta);
+      EXPECT_NE(beyond.info(), Eigen::Success);
+    }
+  }
+}
+
 // SpdSolver on both of its paths (plain loops to 64 rows, Eigen's LLT above, and back): x = A⁻¹ b
 // for A = B Bᵀ + n I, with x aliasing b; false and a NaN solution for an indefinite A.
 TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {

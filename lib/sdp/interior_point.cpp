@@ -75,10 +75,9 @@ void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, cons
 // n = matrix size, m = number of constraints, d = block size.
 struct Workspace {
   Workspace(int n, int m, int d)
-      : chol_x(n), chol_z(n), Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
-        dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), steps(n) {}
-  Eigen::LLT<Eigen::MatrixXd> chol_x, chol_z;  // X = Lx Lxᵀ, Z = Lz Lzᵀ (n × n), large n
-  Eigen::MatrixXd Lx, Lz;                      // the same factors for small n (cholesky_lower, n × n)
+      : Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
+        dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), primal_steps(n), dual_steps(n) {}
+  Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n)
   SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
   Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
   Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
@@ -88,15 +87,17 @@ struct Workspace {
   Eigen::MatrixXd PLt;                         // P Lz⁻ᵀ for the accurate primal direction (n × n)
   Eigen::MatrixXd dz_aff, dz;                  // dual directions ΔZ = −Aᵀ(Δy), diagonal blocks stacked (n × d)
   Eigen::VectorXd rhs, dy_aff, dy;             // Schur right-hand side and dual directions (m)
-  StepLength steps;                            // step-length work matrices
+  StepLength primal_steps, dual_steps;         // step lengths for X and Z; their last Cholesky tests
+                                               // factor the next X and Z (take_tested)
 };
 
-// Cholesky factors of X and Z: plain loops into ws.Lx, ws.Lz for small n, Eigen's LLT otherwise.
+// Cholesky factors of X and Z into ws.Lx, ws.Lz: plain loops for small n, Eigen's blocked kernel
+// otherwise.
 bool factorize(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Z, bool small, Workspace& ws) {
   if (small) return cholesky_lower(Z, ws.Lz) && cholesky_lower(X, ws.Lx);
-  ws.chol_z.compute(Z);
-  ws.chol_x.compute(X);
-  return ws.chol_z.info() == Eigen::Success && ws.chol_x.info() == Eigen::Success;
+  ws.Lz = Z;
+  ws.Lx = X;
+  return cholesky_in_place(ws.Lz) && cholesky_in_place(ws.Lx);
 }
 
 // The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n). With
@@ -157,6 +158,10 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   Eigen::MatrixXd best_X = X;  // n × n
   Eigen::VectorXd best_y = y;  // m
   const int done = resume ? resume->iterations : 0;  // iterations the resumed run already took
+  // X and Z are factored at the first iteration only: after it ws.Lx and ws.Lz are the factors the
+  // corrector's step-length tests computed for the step taken (take_tested), or still those of X
+  // and Z when a step length is 0: two n × n factorisations fewer per iteration.
+  bool factored = false;
   for (int it = done; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1 - done;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
@@ -171,15 +176,14 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     if (rule.stops(verdict, "interior point", it + 1, out)) break;
     const double mu = gap / n;
     const bool accurate = rel_gap < kAccurateDirectionGap;
-    if (!factorize(X, Z, exact_steps, ws)) {
+    if (!factored && !factorize(X, Z, exact_steps, ws)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
-    const Eigen::MatrixXd& Lx = exact_steps ? ws.Lx : ws.chol_x.matrixLLT();  // lower triangles are the factors
-    const Eigen::MatrixXd& Lz = exact_steps ? ws.Lz : ws.chol_z.matrixLLT();
-    invert_lower_factor(Lz, ws.Lz_inv);
+    factored = true;
+    invert_lower_factor(ws.Lz, ws.Lz_inv);
     gram_of_lower_factor(ws.Lz_inv, ws.W);               // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
-    if (exact_steps) invert_lower_factor(Lx, ws.Lx_inv);
+    if (exact_steps) invert_lower_factor(ws.Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
     if (!ws.chol_m.factor(ws.M)) {
       out.reason = "Schur complement not positive definite at iteration " + std::to_string(it);
@@ -191,8 +195,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
     times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
     primal_direction(X, 0.0, accurate, ws, ws.dx_aff);
-    const double ap_aff = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx_aff, 1.0);
-    const double ad_aff = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
+    const double ap_aff = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx_aff, 1.0);
+    const double ad_aff = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
     const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
@@ -211,16 +215,19 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     times_block_diagonal(X, ws.dz, d, ws.dx);  // X ΔZ, through dx as scratch
     ws.P += ws.dx;
     primal_direction(X, sigma * mu, accurate, ws, ws.dx);
-    const double ap = ws.steps.full(X, Lx, ws.Lx_inv, ws.dx, tau);
-    const double ad = ws.steps.block_diagonal(Z, Lz, ws.Lz_inv, ws.dz, d, tau);
+    const double ap = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx, tau);
+    const double ad = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz, d, tau);
     if (ap == 0.0 && ad == 0.0) {
       out.reason = "interior point stalled at iteration " + std::to_string(it);
       break;
     }
-    X += ap * ws.dx;
-    y += ad * ws.dy;
-    lambda_from_y(y, entries, d, lambda);
-    certificate_matrix(C, lambda, d, Z);
+    // X + αΔX and Z + αΔZ exactly as their tests factored them. Z is updated by its step, not
+    // formed again as C − Aᵀ(y): the two differ by rounding, a few ε of Z's diagonal blocks.
+    if (ap > 0) ws.primal_steps.take_tested(X, ws.Lx);
+    if (ad > 0) {
+      y += ad * ws.dy;
+      ws.dual_steps.take_tested(Z, ws.Lz);
+    }
   }
   X = best_X;
   lambda_from_y(best_y, entries, d, lambda);

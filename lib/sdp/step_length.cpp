@@ -210,7 +210,7 @@ void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
 }
 
 StepLength::StepLength(int n)
-    : G_(n, n), B_(n, n), trial_(n, n), trial_factor_(n, n), test_(n), diagonal_(n), subdiagonal_(std::max(n - 1, 1)), work_(2 * n) {}
+    : G_(n, n), B_(n, n), trial_(n, n), trial_factor_(n, n), diagonal_(n), subdiagonal_(std::max(n - 1, 1)), work_(2 * n) {}
 
 double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                         const Eigen::MatrixXd& delta, double tau) {
@@ -267,8 +267,13 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
 
 bool StepLength::positive_definite() {
   if (trial_.rows() <= kExactStepMaxSize) return cholesky_lower(trial_, trial_factor_);
-  test_.compute(trial_);
-  return test_.info() == Eigen::Success;
+  trial_factor_ = trial_;
+  return cholesky_in_place(trial_factor_);
+}
+
+void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor) {
+  next.swap(trial_);
+  next_factor.swap(trial_factor_);
 }
 
 }  // namespace fact::sdp::detail

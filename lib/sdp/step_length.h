@@ -61,6 +61,11 @@ class StepLength {
   double block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                         const Eigen::MatrixXd& D, int d, double tau);
 
+  // After a call with τ < 1 that returned α > 0: swaps P + αΔ, the matrix its Cholesky test passed,
+  // into `next` and that test's factor into the lower triangle of `next_factor` (both n × n). The
+  // interior point takes its next iterate and its factor from here instead of factoring it again.
+  void take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor);
+
  private:
   double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bracket λ_min
   // True when the step for P (n × n) and τ is a Lanczos estimate rather than the exact bracket.
@@ -82,8 +87,8 @@ class StepLength {
   Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
   Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n; overwritten by the tridiagonalisation
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
-  Eigen::MatrixXd trial_factor_;  // its factor on the small path (cholesky_lower), n × n
-  Eigen::LLT<Eigen::MatrixXd> test_;  // its factorisation on the large path
+  Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
+                                  // blocked kernel above kExactStepMaxSize), n × n
   Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
 };
 
