@@ -140,7 +140,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
 
   InteriorPointOutcome out;
   Workspace ws(n, m, d);
-  const bool exact_steps = n <= kExactStepMaxSize;  // L⁻¹ of X is only needed by the exact step length
+  const bool exact_steps = n <= kExactStepMaxSize;
+  const bool invert_x = n <= kInverseLanczosMaxSize;  // L⁻¹ of X: only the step lengths use it
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
   Eigen::VectorXd y = -2.0 * b;                          // dual, m
   if (resume) {
@@ -183,7 +184,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     factored = true;
     invert_lower_factor(ws.Lz, ws.Lz_inv);
     gram_of_lower_factor(ws.Lz_inv, ws.W);               // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
-    if (exact_steps) invert_lower_factor(ws.Lx, ws.Lx_inv);
+    if (invert_x) invert_lower_factor(ws.Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
     if (!ws.chol_m.factor(ws.M)) {
       out.reason = "Schur complement not positive definite at iteration " + std::to_string(it);

@@ -53,12 +53,21 @@ int predictor_lanczos_steps(Eigen::Index n) { return n <= kShortPredictorMaxSize
 // predictor_lanczos_steps for the predictor (τ = 1), kCorrectorLanczosSteps for the corrector.
 // apply_delta(u, w) writes w = Δ u. Ritz values lie inside the spectrum, so the corrector's step
 // is confirmed by a Cholesky test.
+// Up to kInverseLanczosMaxSize rows the products go through the explicit L⁻¹ (`inverse`), above
+// through triangular solves with L.
 template <class ApplyDelta>
-double lanczos_min_eig(const Eigen::MatrixXd& L, double tau, ApplyDelta apply_delta) {
+double lanczos_min_eig(const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse, double tau, ApplyDelta apply_delta) {
+  const Eigen::Index n = L.rows();
+  Eigen::VectorXd u(n), t(n);
+  const int steps = tau >= 1.0 ? predictor_lanczos_steps(n) : kCorrectorLanczosSteps;
+  if (n <= kInverseLanczosMaxSize)
+    return lanczos_lowest<Eigen::VectorXd>(n, steps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+      u.noalias() = inverse.transpose() * v;  // L⁻ᵀ v
+      apply_delta(u, t);
+      w.noalias() = inverse * t;              // L⁻¹ Δ L⁻ᵀ v
+    });
   const auto lower = L.triangularView<Eigen::Lower>();
-  Eigen::VectorXd u(L.rows());
-  const int steps = tau >= 1.0 ? predictor_lanczos_steps(L.rows()) : kCorrectorLanczosSteps;
-  return lanczos_lowest<Eigen::VectorXd>(L.rows(), steps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
+  return lanczos_lowest<Eigen::VectorXd>(n, steps, [&](const Eigen::VectorXd& v, Eigen::VectorXd& w) {
     u = lower.transpose().solve(v);  // L⁻ᵀ v
     apply_delta(u, w);
     lower.solveInPlace(w);           // L⁻¹ Δ L⁻ᵀ v
@@ -220,7 +229,8 @@ double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, cons
     B_.noalias() = G_ * inverse.transpose();       // L⁻¹ Δ L⁻ᵀ
     alpha = from_min_eigenvalue_of_B(tau);
   } else {
-    const double lmin = lanczos_min_eig(L, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
+    const double lmin =
+        lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
     alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   }
   if (tau >= 1.0) return alpha;
@@ -236,7 +246,7 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
     B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
     alpha = from_min_eigenvalue_of_B(tau);
   } else {
-    const double lmin = lanczos_min_eig(L, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
+    const double lmin = lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
       w.resize(n);  // Δ u block by block
       for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
     });

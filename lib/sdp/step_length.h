@@ -21,6 +21,13 @@ constexpr int kExactStepMaxSize = 48;
 // 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128 (plain_noisy; below n = 24 the
 // exact path's plain loops cost less than Eigen's triangular solves).
 constexpr int kPredictorLanczosMinSize = 24;
+// Up to this n the Lanczos estimates multiply by an explicit L⁻¹ (two matrix–vector products a
+// step) instead of solving with L: at n = 64 a pair of Eigen's triangular solves takes 1.2 µs,
+// the two products 0.24 µs; at n = 128 2.5 against 2.0 µs, at n = 200 4.2 against 4.9 µs. Above
+// n = 48 the primal's L⁻¹ is computed for it alone (n³/3): random full rank N = 32 / 40 / 48 /
+// 64 (n = 64 … 128) took 0.90 / 0.93 / 0.98 / 1.02 of the time with a limit of 128 (BENCHMARKS.md,
+// session 26).
+constexpr int kInverseLanczosMaxSize = 96;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
 // (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
@@ -52,7 +59,7 @@ class StepLength {
   explicit StepLength(int n);
 
   // min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. L is P's Cholesky factor
-  // (lower triangle), inverse its L⁻¹ (only read for n ≤ kExactStepMaxSize). With τ < 1 the result is confirmed by a Cholesky test
+  // (lower triangle), inverse its L⁻¹ (only read for n ≤ kInverseLanczosMaxSize). With τ < 1 the result is confirmed by a Cholesky test
   // of P + αΔ (α shrunk by 0.7 until it passes; 0 when 30 tries fail).
   double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
               const Eigen::MatrixXd& delta, double tau);
