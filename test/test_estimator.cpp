@@ -111,6 +111,11 @@ TEST(Estimator, ComplexModeRecoversNoiseFreeSwarmInNMinusOneRounds) {
     const Estimate e = run(s, Mode::complex);
     EXPECT_EQ(e.mode, Mode::complex);
     expect_exact(e, s, n);
+    // The certificate carries the SDP's bound_error: finite and positive (it counts rounding, of
+    // the order of ε‖C‖), and the objective lies above the bound lowered by it.
+    EXPECT_TRUE(std::isfinite(e.certificate.bound_error));
+    EXPECT_GT(e.certificate.bound_error, 0.0);
+    EXPECT_GE(e.certificate.objective, e.certificate.dual_objective - e.certificate.bound_error);
   }
 }
 

@@ -151,6 +151,7 @@ void expect_agreement(const fact::Estimate& cli, const fact::Estimate& direct) {
   }
   expect_near_or_both_nan(cli.certificate.objective, direct.certificate.objective, "objective");
   expect_near_or_both_nan(cli.certificate.dual_objective, direct.certificate.dual_objective, "dual objective");
+  expect_near_or_both_nan(cli.certificate.bound_error, direct.certificate.bound_error, "bound error");
   EXPECT_EQ(cli.certificate.rank, direct.certificate.rank);
 }
 

@@ -333,7 +333,7 @@ fact::Estimate certified_estimate() {
   e.drones = {{3, 0.0, Eigen::Vector3d::Zero(), true},
               {5, x[0], Eigen::Vector3d(x[1], x[2], x[3]), true},
               {9, x[4], Eigen::Vector3d(x[5], x[6], x[7]), true}};
-  e.certificate = {x[8], x[9], 1e-12, -3e-10, 2};
+  e.certificate = {x[8], x[9], 1e-12, -3e-10, 2, 4.5e-13};
   e.timing_us = {{"summed.cost", x[10]}, {"summed.sdp", 812.5}, {"association", 3.0}, {"total", 1000.25}};
   return e;
 }
@@ -357,6 +357,7 @@ void expect_same(const fact::Estimate& a, const fact::Estimate& b) {
   EXPECT_SAME_DOUBLE(a.certificate.gap, b.certificate.gap);
   EXPECT_SAME_DOUBLE(a.certificate.min_eig, b.certificate.min_eig);
   EXPECT_EQ(a.certificate.rank, b.certificate.rank);
+  EXPECT_SAME_DOUBLE(a.certificate.bound_error, b.certificate.bound_error);
   ASSERT_EQ(a.timing_us.size(), b.timing_us.size());
   for (std::size_t i = 0; i < a.timing_us.size(); ++i) {
     EXPECT_EQ(a.timing_us[i].first, b.timing_us[i].first);
@@ -373,6 +374,22 @@ TEST(ResultJson, RoundTripIsBitExactAndKeepsTimingOrder) {
   EXPECT_NE(text.find("\"status\": \"certified\""), std::string::npos) << text;
   EXPECT_LT(text.find("summed.sdp"), text.find("association"));  // not alphabetical
   EXPECT_EQ(text.back(), '\n');
+}
+
+// A result written before "bound_error" existed reads, with the bound's rounding unknown (NaN) and
+// everything else as written.
+TEST(ResultJson, CertificateWithoutBoundErrorReadsItAsNaN) {
+  const fact::Estimate e = certified_estimate();
+  const std::string text = fact::estimate_to_json(e);
+  const std::string key = "\"bound_error\": 4.5e-13,";
+  ASSERT_NE(text.find(key), std::string::npos) << text;
+  std::string old = text;
+  old.erase(old.find(key), key.size());
+  const fact::Estimate back = fact::estimate_from_json(old);
+  EXPECT_TRUE(std::isnan(back.certificate.bound_error));
+  fact::Estimate expected = e;
+  expected.certificate.bound_error = back.certificate.bound_error;
+  expect_same(expected, back);
 }
 
 TEST(ResultJson, EveryModeAndStatusRoundTrips) {
@@ -392,7 +409,7 @@ TEST(ResultJson, MissingValuesAreNullAndReadBackAsNaN) {
   fact::Estimate e = certified_estimate();
   e.status = fact::EstimateStatus::invalid_input;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  e.certificate = {nan, std::numeric_limits<double>::infinity(), nan, nan, 0};
+  e.certificate = {nan, std::numeric_limits<double>::infinity(), nan, nan, 0, nan};
   e.drones[2] = {9, nan, Eigen::Vector3d(1.5, nan, nan), false};
   e.unresolved = {9};
   e.reference = -1;
@@ -405,6 +422,8 @@ TEST(ResultJson, MissingValuesAreNullAndReadBackAsNaN) {
   EXPECT_TRUE(std::isnan(back.certificate.gap));
   EXPECT_TRUE(std::isnan(back.certificate.min_eig));
   EXPECT_EQ(back.certificate.rank, 0);
+  EXPECT_TRUE(std::isnan(back.certificate.bound_error));
+  EXPECT_NE(text.find("\"bound_error\": null"), std::string::npos) << text;
   EXPECT_TRUE(std::isnan(back.drones[2].yaw));
   EXPECT_EQ(back.drones[2].position[0], 1.5);
   EXPECT_TRUE(std::isnan(back.drones[2].position[1]));
@@ -453,7 +472,9 @@ TEST(ResultJson, DecoderErrorsNameTheField) {
   EXPECT_EQ(error(edit(text, R"("rounds_used": 4)", R"("rounds_used": -4)")), "rounds_used: expected a count >= 0, got -4");
   EXPECT_EQ(error(edit(text, R"("id": 9)", R"("id": 5)")), "drones[2].id: duplicate id 5 (also at drones[1])");
   EXPECT_EQ(error(edit(text, R"("gap": 1e-12)", R"("gap": 1e-12, "eig_gap": 0)")),
-            R"(certificate.eig_gap: unknown key (allowed: "objective", "dual_objective", "gap", "min_eig", "rank"))");
+            R"(certificate.eig_gap: unknown key (allowed: "objective", "dual_objective", "bound_error", "gap", "min_eig", "rank"))");
+  EXPECT_EQ(error(edit(text, R"("bound_error": 4.5e-13)", R"("bound_error": "small")")),
+            R"(certificate.bound_error: expected a number or null, got "small")");
   EXPECT_EQ(error(edit(text, "fact-result-v1", "fact-rounds-v1")), R"(format: expected "fact-result-v1", got "fact-rounds-v1")");
 }
 

@@ -625,6 +625,8 @@ TEST(Convert, ResultToMessageCarriesTheEstimate) {
   EXPECT_EQ(back.unresolved, e.unresolved);
   ASSERT_EQ(back.drones.size(), e.drones.size());
   for (size_t i = 0; i < e.drones.size(); ++i) EXPECT_EQ(back.drones[i].position, e.drones[i].position);
+  EXPECT_EQ(back.certificate.dual_objective, e.certificate.dual_objective);
+  EXPECT_TRUE(std::isnan(back.certificate.bound_error));  // the message does not carry it
 }
 
 TEST(Convert, InvalidInputResultAndResultErrors) {

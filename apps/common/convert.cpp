@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -235,6 +236,7 @@ std::string result_from_message(const fact::swarm_result_t& m, Estimate* out) {
   e.certificate.gap = m.gap;
   e.certificate.min_eig = m.min_eig;
   e.certificate.rank = m.rank;
+  e.certificate.bound_error = std::numeric_limits<double>::quiet_NaN();  // not in the message
   e.timing_us = {{"total", m.solve_us}};
   *out = std::move(e);
   return "";

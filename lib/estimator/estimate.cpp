@@ -120,6 +120,7 @@ Certificate certificate_of(const sdp::Result& r) {
   c.gap = r.rel_gap;
   c.min_eig = r.min_eig_S;
   c.rank = r.rank;
+  c.bound_error = r.bound_error;
   return c;
 }
 

@@ -294,16 +294,20 @@ std::vector<DronePose> read_poses(const Json& value, const std::string& path) {
   return poses;
 }
 
-// Certificate values that do not exist (e.g. an invalid_input result) are null (NaN).
+// Certificate values that do not exist (e.g. an invalid_input result) are null (NaN); so is a
+// missing "bound_error" (files written before it was added).
 Certificate read_certificate(const Json& value, const std::string& path) {
   expect_object(value, path);
-  allow_only(value, path, {"objective", "dual_objective", "gap", "min_eig", "rank"});
+  allow_only(value, path, {"objective", "dual_objective", "bound_error", "gap", "min_eig", "rank"});
   Certificate c;
   c.objective = number_or_null(need(value, path, "objective"), member(path, "objective"));
   c.dual_objective = number_or_null(need(value, path, "dual_objective"), member(path, "dual_objective"));
   c.gap = number_or_null(need(value, path, "gap"), member(path, "gap"));
   c.min_eig = number_or_null(need(value, path, "min_eig"), member(path, "min_eig"));
   c.rank = integer(need(value, path, "rank"), member(path, "rank"));
+  c.bound_error = value.contains("bound_error")
+                      ? number_or_null(value["bound_error"], member(path, "bound_error"))
+                      : std::numeric_limits<double>::quiet_NaN();
   return c;
 }
 
@@ -328,6 +332,7 @@ Json write_certificate(const Certificate& c) {
   Json j;
   j["objective"] = finite_or_null(c.objective);
   j["dual_objective"] = finite_or_null(c.dual_objective);
+  j["bound_error"] = finite_or_null(c.bound_error);
   j["gap"] = finite_or_null(c.gap);
   j["min_eig"] = finite_or_null(c.min_eig);
   j["rank"] = c.rank;

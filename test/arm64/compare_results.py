@@ -18,7 +18,8 @@ import math
 import re
 import sys
 
-IGNORED_KEYS = {"timing_us"}
+# bound_error is a rounding estimate (of the order of ε‖C‖), not a result: same_optimum uses it.
+IGNORED_KEYS = {"timing_us", "bound_error"}
 # Results whose rotation optimum is not unique (too few rounds for the summed cost, or an SDP
 # certified optimal but not unique): every optimal rounding is an equally valid answer, so the
 # poses are arbitrary and only the status, the counts and the optimal value are compared.
@@ -78,18 +79,25 @@ def walk(a, b, path, tolerance, largest):
     raise Differ(f"{path}: {type(a).__name__} vs {type(b).__name__}")
 
 
+def lower_bound(c):
+    """The certificate's rigorous lower bound: dual_objective less bound_error (what rounding can
+    have raised it by; absent or null in results written before it existed, then taken as 0)."""
+    return c["dual_objective"] - (c.get("bound_error") or 0.0)
+
+
 def same_optimum(a, b, tolerance, largest):
-    """Both certify the same optimal value: each run's optimum lies in [dual_objective, objective]
-    (the solver stops at a relative gap of 1e-9, so the objectives alone may differ by that much),
-    and the two intervals overlap to the tolerance, relative to the value."""
+    """Both certify the same optimal value: each run's optimum lies in
+    [dual_objective - bound_error, objective] (the solver stops at a relative gap of 1e-9, so the
+    objectives alone may differ by that much), and the two intervals overlap to the tolerance,
+    relative to the value."""
     for c in (a, b):
         if c.get("objective") is None or c.get("dual_objective") is None:
             raise Differ(f"$.certificate: no objective or dual objective in {c}")
     scale = max(1.0, abs(a["objective"]), abs(b["objective"]))
-    separation = max(a["dual_objective"], b["dual_objective"]) - min(a["objective"], b["objective"])
+    separation = max(lower_bound(a), lower_bound(b)) - min(a["objective"], b["objective"])
     if separation > tolerance * scale:
-        raise Differ(f"$.certificate: optimal value in [{a['dual_objective']!r}, {a['objective']!r}] vs "
-                     f"[{b['dual_objective']!r}, {b['objective']!r}]: apart by {separation:.3g}")
+        raise Differ(f"$.certificate: optimal value in [{lower_bound(a)!r}, {a['objective']!r}] vs "
+                     f"[{lower_bound(b)!r}, {b['objective']!r}]: apart by {separation:.3g}")
     largest["certificate"] = max(largest.get("certificate", 0.0), abs(a["objective"] - b["objective"]) / scale)
 
 

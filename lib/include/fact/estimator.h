@@ -90,6 +90,10 @@ struct Certificate {
   double gap = 0;             // relative duality gap
   double min_eig = 0;         // λ_min of the dual slack S (scaled problem)
   int rank = 0;               // numerical rank of X
+  double bound_error = 0;     // what floating point can have raised dual_objective by
+                              // (sdp::Result::bound_error): every feasible X has
+                              // ⟨C, X⟩ ≥ dual_objective − bound_error; NaN when not known (a
+                              // result from a fact_swarm_result_t message, which does not carry it)
 };
 
 struct Estimate {

@@ -34,11 +34,14 @@
 //    "reference": id (or -1), "rounds_used": K,
 //    "drones": [{"id": i, "yaw": r, "position": [x,y,z], "resolved": bool}],   Estimate order
 //    "unresolved": [ids],
-//    "certificate": {"objective": v, "dual_objective": v, "gap": v, "min_eig": v, "rank": n},
+//    "certificate": {"objective": v, "dual_objective": v, "bound_error": v, "gap": v, "min_eig": v,
+//                    "rank": n},
 //    "timing_us": {"<stage>": microseconds, ...}}                          Estimate order
-//   Values that do not exist are null and read back as NaN: the certificate's four numbers
+//   Values that do not exist are null and read back as NaN: the certificate's five numbers
 //   (e.g. an invalid_input result has none), and the yaw and position components of a drone
-//   with "resolved": false. A resolved drone's pose must be finite.
+//   with "resolved": false. A resolved drone's pose must be finite. "bound_error" (what
+//   rounding can have raised dual_objective by) may be absent, as in files written before it
+//   was added, and then reads as NaN.
 //
 // fact-truth-v1:
 //   {"format": "fact-truth-v1",
