@@ -1,16 +1,16 @@
 // LCM log files in tests of the log tools (fact-log-merge, fact-log-compare): events written with
-// lcm::LogFile and read back, and a fresh temporary directory per test, removed afterwards.
+// lcm::LogFile and read back; the tests' temporary directories come from temp_dir.h.
 #pragma once
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
-#include <stdlib.h>
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
-#include <utility>
 #include <vector>
+
+#include "temp_dir.h"
 
 namespace fact::test {
 
@@ -45,23 +45,5 @@ inline std::vector<LoggedEvent> read_log(const std::filesystem::path& path) {
     out.push_back({e->timestamp, e->channel, std::string(static_cast<const char*>(e->data), e->datalen)});
   return out;
 }
-
-// A test fixture with a fresh temporary directory dir_ (<tmp>/<prefix>-XXXXXX) per test.
-class TempDirTest : public ::testing::Test {
- protected:
-  explicit TempDirTest(std::string prefix) : prefix_(std::move(prefix)) {}
-  void SetUp() override {
-    std::string pattern = (std::filesystem::temp_directory_path() / (prefix_ + "-XXXXXX")).string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    if (!dir_.empty()) std::filesystem::remove_all(dir_);
-  }
-  std::filesystem::path dir_;
-
- private:
-  std::string prefix_;
-};
 
 }  // namespace fact::test

@@ -9,6 +9,7 @@
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
+#include "temp_dir.h"
 #include "test_time.h"
 
 #include <gtest/gtest.h>
@@ -85,15 +86,13 @@ int exit_code(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-class DetectorApp : public ::testing::Test {
+class DetectorApp : public fact::test::TempDirTest {
  protected:
+  DetectorApp() : TempDirTest("fact-detector-app") {}
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("fact_detector_app_" + std::to_string(getpid()));
-    fs::remove_all(dir_);
+    TempDirTest::SetUp();
     fs::create_directories(dir_ / "png");
   }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
 };
 
 TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {

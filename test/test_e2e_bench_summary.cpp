@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "run_command.h"
+#include "temp_dir.h"
 
 namespace fs = std::filesystem;
 
@@ -34,15 +35,9 @@ const std::vector<std::string> kBatchB = {
     "2,1,0,1,1,0,9.8,1,0.005,0.01,0.02,0.03,12,14,5,1,1,1,2,1",
 };
 
-class E2eBenchSummary : public ::testing::Test {
+class E2eBenchSummary : public fact::test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("fact_e2e_summary_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  E2eBenchSummary() : TempDirTest("fact-e2e-summary") {}
 
   std::string write_csv(const std::string& name, const std::string& header, const std::vector<std::string>& rows) {
     const fs::path path = dir_ / name;
@@ -58,7 +53,6 @@ class E2eBenchSummary : public ::testing::Test {
     return fact::test::run_command(cmd + " --out-dir '" + out_dir.string() + "'");
   }
 
-  fs::path dir_;
 };
 
 std::vector<std::string> lines_of(const fs::path& path) {

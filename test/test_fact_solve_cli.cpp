@@ -20,6 +20,7 @@
 #include "fact/estimator.h"
 #include "fact/json_io.h"
 #include "fact/simgen.h"
+#include "temp_dir.h"
 
 extern char** environ;
 
@@ -47,14 +48,9 @@ void write_file(const fs::path& path, const std::string& text) {
 }
 
 // A fresh temporary directory per test, removed afterwards.
-class FactSolveCli : public ::testing::Test {
+class FactSolveCli : public fact::test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "fact-solve-cli-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  FactSolveCli() : TempDirTest("fact-solve-cli") {}
 
   fs::path file(const std::string& name) const { return dir_ / name; }
 
@@ -91,7 +87,6 @@ class FactSolveCli : public ::testing::Test {
     return file(name).string();
   }
 
-  fs::path dir_;
 };
 
 const std::string kValidRounds = R"({"format": "fact-rounds-v1", "drones": [2, 7],

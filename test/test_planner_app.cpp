@@ -43,6 +43,7 @@
 #include "fact/setpoint_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "temp_dir.h"
 #include "test_time.h"
 
 extern char** environ;
@@ -329,18 +330,17 @@ class World {
 
 bool starts_with(const std::string& s, const std::string& p) { return s.rfind(p, 0) == 0; }
 
-class PlannerApp : public ::testing::Test {
+class PlannerApp : public fact::test::TempDirTest {
  protected:
+  PlannerApp() : TempDirTest("fact-planner-app") {}
   void SetUp() override {
     if (!only_loopback()) GTEST_SKIP() << "not in a private network namespace: run through scripts/netns-run.sh";
-    std::string pattern = (fs::temp_directory_path() / "fact-planner-app-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
+    TempDirTest::SetUp();
   }
   void TearDown() override {
     if (process_ && (HasFailure() || std::getenv("FACT_TEST_VERBOSE"))) std::fprintf(stderr, "fact-planner stderr:\n%s\n", process_->err().c_str());
     process_.reset();
-    if (!dir_.empty()) fs::remove_all(dir_);
+    TempDirTest::TearDown();
   }
   // Fast spins and moves keep the test short; random moves off so the target rule is checked.
   Process& start(std::vector<std::string> extra) {
@@ -352,7 +352,6 @@ class PlannerApp : public ::testing::Test {
     EXPECT_TRUE(process_->started());
     return *process_;
   }
-  fs::path dir_;
   std::unique_ptr<Process> process_;
 };
 

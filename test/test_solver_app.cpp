@@ -41,6 +41,7 @@
 #include "fact/simgen.h"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "temp_dir.h"
 #include "test_time.h"
 
 extern char** environ;
@@ -230,18 +231,17 @@ void expect_result_equals(const fact::swarm_result_t& got, const fact::Estimate&
   EXPECT_EQ(got.solve_us, 0.0);  // not the clock: results are reproducible bit for bit
 }
 
-class SolverApp : public ::testing::Test {
+class SolverApp : public fact::test::TempDirTest {
  protected:
+  SolverApp() : TempDirTest("fact-solver-app") {}
   void SetUp() override {
     if (!only_loopback())
       GTEST_SKIP() << "not in a private network namespace: run through scripts/netns-run.sh (ctest does)";
-    std::string pattern = (fs::temp_directory_path() / "fact-solver-app-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
+    TempDirTest::SetUp();
   }
   void TearDown() override {
     processes_.clear();  // stops what still runs
-    if (!dir_.empty()) fs::remove_all(dir_);
+    TempDirTest::TearDown();
   }
 
   fs::path file(const std::string& name) const { return dir_ / name; }
@@ -285,7 +285,6 @@ class SolverApp : public ::testing::Test {
     return run("publish" + std::to_string(drone), words);
   }
 
-  fs::path dir_;
   std::vector<std::unique_ptr<Process>> processes_;
 };
 

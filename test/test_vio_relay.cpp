@@ -38,6 +38,7 @@
 
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
+#include "temp_dir.h"
 #include "test_time.h"
 
 extern char** environ;
@@ -200,17 +201,9 @@ int64_t wall_us() {
 std::string data(const std::string& name) { return std::string(FACT_TEST_DATA) + "/vio/" + name; }
 
 // A fresh temporary directory per test.
-class VioRelayTest : public ::testing::Test {
+class VioRelayTest : public fact::test::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (fs::temp_directory_path() / "fact-vio-relay-XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    if (!dir_.empty()) fs::remove_all(dir_);
-  }
-  fs::path dir_;
+  VioRelayTest() : TempDirTest("fact-vio-relay") {}
 };
 
 // The LCM tests: only inside a private network namespace.
