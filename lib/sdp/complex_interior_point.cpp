@@ -40,11 +40,12 @@ struct ComplexCholesky {
 // Every matrix of one iteration, allocated once (N × N complex unless noted).
 struct Workspace {
   explicit Workspace(Eigen::Index N)
-      : chol_x(N), chol_z(N), next_x(N), next_z(N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
-        trial(N, N), PZ(N, N), u(N), u_y(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
+      : chol_x(N), chol_z(N), next_x(N), next_z(N), Lx_inv(N, N), Lz_inv(N, N), W(N, N), M(N, N), chol_m(N), P(N, N), dx_aff(N, N), dx(N, N),
+        trial(N, N), PZ(N, N), u(N), u_x(N), u_y(N), ones(VectorXd::Ones(N)), rhs(N), dy_aff(N), dy(N) {}
   ComplexCholesky chol_x, chol_z;        // X = Lx Lxᴴ, Z = Lz Lzᴴ
   ComplexCholesky next_x, next_z;        // Cholesky tests of the corrector's X + αΔX, Z + αΔZ: the
                                          // next iteration's chol_x, chol_z once the step is taken
+  MatrixXcd Lx_inv;                      // Lx⁻¹ (lower triangular), up to kExplicitLxMaxSize
   MatrixXcd Lz_inv;                      // Lz⁻¹ (lower triangular)
   MatrixXcd W;                           // Z⁻¹
   MatrixXd M;                            // Schur complement, N × N real
@@ -53,7 +54,7 @@ struct Workspace {
   MatrixXcd dx_aff, dx;                  // predictor / corrector primal directions
   MatrixXcd trial;                       // X + αΔX or Z + αΔZ for the Cholesky test
   MatrixXcd PZ;                          // P Lz⁻ᴴ (accurate primal_direction)
-  Eigen::VectorXcd u;                    // Lanczos scratch vector, N
+  Eigen::VectorXcd u, u_x;               // Lanczos scratch vectors, N
   VectorXd u_y;                          // y + αΔy of a dual trial, N
   VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
 };
@@ -99,11 +100,24 @@ double step_length(double lowest, double tau, Workspace& ws, ComplexCholesky& ne
   return 0.0;
 }
 
-// The step for X + α ΔX; Lanczos on Lx⁻¹ ΔX Lx⁻ᴴ through triangular solves with X's factor (as
-// fast as products with an explicit Lx⁻¹ here, which would cost an inversion).
+// Up to this N the primal step's Lanczos multiplies by an explicit Lx⁻¹ (inverted once an
+// iteration, for the predictor's and the corrector's 4 + 8 steps) instead of solving with Lx: a
+// pair of Eigen's complex triangular solves takes 1.2 / 2.7 / 4.6 µs at N = 32 / 64 / 100, the two
+// products 0.24 / 1.1 / 2.7 µs, and the inversion 2.3 / ≈ 10 / 37 µs (BENCHMARKS.md, session 26).
+constexpr Eigen::Index kExplicitLxMaxSize = 64;
+
+// The step for X + α ΔX; Lanczos on Lx⁻¹ ΔX Lx⁻ᴴ, through ws.Lx_inv up to kExplicitLxMaxSize and
+// through triangular solves with X's factor above.
 double primal_step(const MatrixXcd& X, const MatrixXcd& dx, Workspace& ws, double tau) {
   const auto L = ws.chol_x.lower();
+  const bool explicit_inverse = X.rows() <= kExplicitLxMaxSize;
   const double lowest = lanczos_lowest<Eigen::VectorXcd>(X.rows(), lanczos_steps(tau), [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
+    if (explicit_inverse) {
+      ws.u.noalias() = ws.Lx_inv.adjoint() * v;  // Lx⁻ᴴ v
+      ws.u_x.noalias() = dx * ws.u;
+      w.noalias() = ws.Lx_inv * ws.u_x;          // Lx⁻¹ ΔX Lx⁻ᴴ v
+      return;
+    }
     ws.u = L.adjoint().solve(v);  // Lx⁻ᴴ v
     w.noalias() = dx * ws.u;
     L.solveInPlace(w);  // Lx⁻¹ ΔX Lx⁻ᴴ v
@@ -201,6 +215,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
     factored = true;
     invert_lower_factor(ws.chol_z.L, ws.Lz_inv);   // lower triangular, zeros above
+    if (N <= kExplicitLxMaxSize) invert_lower_factor(ws.chol_x.L, ws.Lx_inv);
     gram_of_lower_factor(ws.Lz_inv, ws.W);          // Z⁻¹ = Lz⁻ᴴ Lz⁻¹
     ws.M = (X.array() * ws.W.array().conjugate()).real();
     if (!ws.chol_m.factor(ws.M)) {
