@@ -20,7 +20,7 @@ if(TARGET fact-fc-bridge)
   target_compile_definitions(fact_fc_bridge_tests PRIVATE
     FACT_FC_BRIDGE_BINARY="$<TARGET_FILE:fact-fc-bridge>"
     FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
-  target_link_libraries(fact_fc_bridge_tests PRIVATE fact_mavlink fact_lcmtypes GTest::gtest)
+  target_link_libraries(fact_fc_bridge_tests PRIVATE fact_app_common fact_mavlink fact_lcmtypes GTest::gtest)
   add_dependencies(fact_fc_bridge_tests fact-fc-bridge)
   fact_discover_tests(fact_fc_bridge_tests 30)
 

@@ -15,7 +15,7 @@ if(TARGET fact_vision)
     target_compile_definitions(fact_detector_app_tests PRIVATE
       FACT_DETECTOR_BINARY="$<TARGET_FILE:fact-detector>"
       FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
-    target_link_libraries(fact_detector_app_tests PRIVATE fact_vision fact_lcmtypes GTest::gtest)
+    target_link_libraries(fact_detector_app_tests PRIVATE fact_app_common fact_vision fact_lcmtypes GTest::gtest)
     add_dependencies(fact_detector_app_tests fact-detector)
     fact_discover_tests(fact_detector_app_tests 60)
   endif()

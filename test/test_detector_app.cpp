@@ -5,6 +5,7 @@
 //
 // udpm never leaves the machine: main() re-executes this program through scripts/netns-run.sh
 // (FACT_NETNS_RUN) unless only lo is visible, as test_vio_relay.cpp does.
+#include "common/app.h"
 #include "fact/app_status_t.hpp"
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
@@ -176,11 +177,7 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
   }
   ASSERT_FALSE(status.empty());
   const fact::app_status_t& last = status.back();
-  auto counter = [&](const std::string& name) -> int64_t {
-    for (int i = 0; i < last.num_counters; ++i)
-      if (last.counter_names[i] == name) return last.counter_values[i];
-    return -1;
-  };
+  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
   EXPECT_EQ(counter("size_mismatch"), 1) << err;
   EXPECT_EQ(counter("published"), frames);
   EXPECT_NE(err.find("size_mismatch"), std::string::npos) << err;
@@ -296,11 +293,7 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
   EXPECT_EQ(code, 0) << err;
   ASSERT_FALSE(status.empty()) << err;
   const fact::app_status_t& last = status.back();
-  auto counter = [&](const std::string& name) -> int64_t {
-    for (int i = 0; i < last.num_counters; ++i)
-      if (last.counter_names[i] == name) return last.counter_values[i];
-    return -1;
-  };
+  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
   EXPECT_EQ(counter("published"), 7) << err;  // every good frame, also the ones after bad ones
   EXPECT_EQ(counter("bad_frame"), 1) << err;
   EXPECT_EQ(counter("bad_intrinsics"), 1) << err;

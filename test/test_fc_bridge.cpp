@@ -33,6 +33,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/app.h"
 #include "fact/app_status_t.hpp"
 #include "fact/fc_state_t.hpp"
 #include "fact/mavlink.h"
@@ -209,11 +210,7 @@ class LcmSide {
     while (lcm.handleTimeout(0) > 0) {
     }
   }
-  int64_t counter(const std::string& name) const {
-    for (int i = 0; i < status.num_counters; ++i)
-      if (status.counter_names[i] == name) return status.counter_values[i];
-    return -1;
-  }
+  int64_t counter(const std::string& name) const { return fact::app::counter_value(status, name).value_or(-1); }
   lcm::LCM lcm;
   std::vector<fact::fc_state_t> states;
   fact::app_status_t status;

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -307,6 +308,14 @@ TEST(AppStatus, PublishesCountersAsAppStatus) {
   EXPECT_EQ(a.counter_values, (std::vector<int64_t>{3, 5}));
   EXPECT_EQ(r.decoded[1].utime, t0 + 1000000);
   EXPECT_EQ(r.decoded[1].counter_values, (std::vector<int64_t>{3, 6}));
+  // The reading side: counter_value finds a counter by name in the received message.
+  EXPECT_EQ(app::counter_value(r.decoded[1], "foreign_messages"), std::optional<int64_t>(6));
+  EXPECT_EQ(app::counter_value(r.decoded[1], "rejected_nan"), std::optional<int64_t>(3));
+  EXPECT_EQ(app::counter_value(r.decoded[1], "undecodable"), std::nullopt);
+  fact::app_status_t short_arrays = r.decoded[1];
+  short_arrays.num_counters = 5;  // more than the arrays hold (a message built in code): no read past them
+  EXPECT_EQ(app::counter_value(short_arrays, "foreign_messages"), std::optional<int64_t>(6));
+  EXPECT_EQ(app::counter_value(short_arrays, "missing"), std::nullopt);
 
   heartbeat.set_period_us(100);
   heartbeat.tick(t0 + 1000050);  // 50 µs: no

@@ -34,6 +34,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/app.h"
 #include "common/convert.h"
 #include "fact/app_status_t.hpp"
 #include "fact/detections_t.hpp"
@@ -135,9 +136,7 @@ int64_t wall_us() {
 }
 
 int64_t counter(const fact::app_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i)
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  return -1;
+  return fact::app::counter_value(s, name).value_or(-1);
 }
 
 double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }

@@ -165,10 +165,7 @@ class Listener {
   bool stopped() const { return !status.empty() && status.back().state == "stopped"; }
   int64_t counter(const std::string& name) const {
     if (status.empty()) return -1;
-    const auto& s = status.back();
-    for (int i = 0; i < s.num_counters; ++i)
-      if (s.counter_names[static_cast<size_t>(i)] == name) return s.counter_values[static_cast<size_t>(i)];
-    return 0;
+    return fact::app::counter_value(status.back(), name).value_or(0);
   }
 
   std::map<std::string, std::vector<fact::frame_t>> frames;

@@ -186,9 +186,7 @@ class Lcm {
   }
   double sim_s() const { return sim_utime < 0 ? -1 : (sim_utime - kEpoch) * 1e-6; }
   static int64_t counter(const fact::app_status_t& s, const std::string& name) {
-    for (int i = 0; i < s.num_counters; ++i)
-      if (s.counter_names[static_cast<size_t>(i)] == name) return s.counter_values[static_cast<size_t>(i)];
-    return -1;
+    return fact::app::counter_value(s, name).value_or(-1);
   }
   int64_t sim_counter(const std::string& name) const { return counter(sim_status, name); }
   int64_t bridge_counter(const std::string& name) const { return counter(bridge_status, name); }

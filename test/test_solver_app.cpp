@@ -33,6 +33,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/app.h"
 #include "common/convert.h"
 #include "fact/app_status_t.hpp"
 #include "fact/estimator.h"
@@ -191,9 +192,7 @@ class Listener {
 };
 
 int64_t counter(const fact::app_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i)
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  return -1;
+  return fact::app::counter_value(s, name).value_or(-1);
 }
 
 std::string encode(const fact::swarm_result_t& m) {

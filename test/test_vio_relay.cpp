@@ -30,12 +30,14 @@
 #include <functional>
 #include <memory>
 #include <sstream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <lcm/lcm-cpp.hpp>
 
+#include "common/app.h"
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "temp_dir.h"
@@ -187,10 +189,9 @@ class Listener {
 };
 
 int64_t counter(const fact::app_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.num_counters; ++i)
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  ADD_FAILURE() << "no counter " << name << " in the status message";
-  return -1;
+  const std::optional<int64_t> value = fact::app::counter_value(s, name);
+  if (!value) ADD_FAILURE() << "no counter " << name << " in the status message";
+  return value.value_or(-1);
 }
 
 int64_t wall_us() {

@@ -109,6 +109,14 @@ int64_t Status::value(const std::string& name) const {
   return it == values_.end() ? 0 : it->second;
 }
 
+std::optional<int64_t> counter_value(const fact::app_status_t& m, const std::string& name) {
+  const std::size_t n = std::min({static_cast<std::size_t>(std::max(m.num_counters, 0)), m.counter_names.size(),
+                                  m.counter_values.size()});
+  for (std::size_t i = 0; i < n; ++i)
+    if (m.counter_names[i] == name) return m.counter_values[i];
+  return std::nullopt;
+}
+
 void Status::set_state(const std::string& s) { state_ = s; }
 void Status::note(const std::string& message) { message_ = message; }
 void Status::set_period_us(int64_t period_us) { period_us_ = period_us > 0 ? period_us : 1; }

@@ -20,6 +20,7 @@
 #include <exception>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,10 @@ class Status {
   bool ever_published_ = false;
   int64_t published_ = 0;
 };
+
+// The value of counter `name` in a received heartbeat (the reading side of Status, for tools and
+// tests that check an app's counters); nullopt when the message has no such counter.
+std::optional<int64_t> counter_value(const fact::app_status_t& m, const std::string& name);
 
 namespace detail {
 // lcm-gen's decoders resize every variable-length array to the count read from the wire before

@@ -62,16 +62,6 @@ struct DroneTrace {
   Tally results, rounds;  // FACT_RESULT_<id> against fact-solver, FACT_SWARM_ROUNDS_<id> against fact-gossip
 };
 
-// The value of counter name in m; false when m has none.
-bool counter(const fact::app_status_t& m, const std::string& name, int64_t* value) {
-  for (int i = 0; i < m.num_counters; ++i)
-    if (m.counter_names[i] == name) {
-      *value = m.counter_values[i];
-      return true;
-    }
-  return false;
-}
-
 // "spin round 1: spin 2π ..." → "spin round 1". Not decisions (""): hovers ("hover: odometry
 // stale ...") and waits ("wait round 1: ..."), whose presence depends on whether the round's result
 // arrived before or after the spin ended, a race between processes, not a choice.
@@ -105,9 +95,10 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
       fact::app_status_t m;
       if (!dec.decode(e, &m)) return;
       DroneTrace& t = (*out)[m.drone_id];
-      int64_t value = 0;
-      if (m.app == "fact-solver" && counter(m, "results_published", &value)) t.results.heartbeat(value);
-      if (m.app == "fact-gossip" && counter(m, "swarm_rounds_published", &value)) t.rounds.heartbeat(value);
+      if (m.app == "fact-solver")
+        if (const auto value = fact::app::counter_value(m, "results_published")) t.results.heartbeat(*value);
+      if (m.app == "fact-gossip")
+        if (const auto value = fact::app::counter_value(m, "swarm_rounds_published")) t.rounds.heartbeat(*value);
       if (m.app != "fact-planner") return;
       const std::string d = decision(m.state);
       if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
