@@ -92,6 +92,7 @@ class DetectorApp : public fact::test::TempDirTest {
   DetectorApp() : TempDirTest("fact-detector-app") {}
   void SetUp() override {
     TempDirTest::SetUp();
+    if (HasFatalFailure()) return;  // no directory: nothing to create under it
     fs::create_directories(dir_ / "png");
   }
 };

@@ -328,6 +328,10 @@ void expect_invalid(const Rounds& r, const EstimateOptions& o, const std::vector
   const Estimate e = estimate_poses(r, o);
   EXPECT_EQ(e.status, EstimateStatus::invalid_input);
   for (const std::string& w : words) EXPECT_NE(e.reason.find(w), std::string::npos) << e.reason << " lacks " << w;
+  // No SDP was solved: every certificate number is NaN (null in fact-result-v1), the bound's error too.
+  EXPECT_TRUE(std::isnan(e.certificate.objective));
+  EXPECT_TRUE(std::isnan(e.certificate.dual_objective));
+  EXPECT_TRUE(std::isnan(e.certificate.bound_error));
 }
 
 TEST(EstimatorInput, NaNInAVectorNamesRoundDroneAndField) {

@@ -265,6 +265,11 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
         for (int i = 0; i < n; i += 2) delta.block(i, i, 2, 2) = blocks.middleRows(i, 2);
       }
       StepLength steps(n);
+      // A predictor's call first (τ = 1: no Cholesky test), as the interior point makes: it must not
+      // leave anything the corrector's hand-over would pick up.
+      const double predicted = block_diagonal ? steps.block_diagonal(P, L, L_inv, blocks, 2, 1.0)
+                                              : steps.full(P, L, L_inv, 1.7 * delta, 1.0);
+      ASSERT_GT(predicted, 0.0);
       const double alpha = block_diagonal ? steps.block_diagonal(P, L, L_inv, blocks, 2, 0.95)
                                           : steps.full(P, L, L_inv, delta, 0.95);
       ASSERT_GT(alpha, 0.0);
@@ -389,6 +394,10 @@ TEST(SdpNewton, CrawlWatchStopsOnlyASlowRunWithALargeGradient) {
   EXPECT_EQ(first_stop(0.1, 0.98, 1e-5), -1);  // small gradient: near a critical point, let it converge
   EXPECT_EQ(first_stop(0.0, 1.0, 1e-2), -1);   // no watch
   EXPECT_EQ(first_stop(0.1, 0.95, 1e-2), -1);  // 14 % in 3 steps, 17 % of the current f
+  // The look-back is exactly 3 steps: 0.96³ falls 13 % of the current f (2 steps would be 8.5 %),
+  // 0.972³ 8.9 % (4 steps would be 12 %).
+  EXPECT_EQ(first_stop(0.1, 0.96, 1e-2), -1);
+  EXPECT_EQ(first_stop(0.1, 0.972, 1e-2), 6);
   EXPECT_EQ(first_stop(0.3, 0.95, 1e-2), 6);   // a larger fraction stops it
 }
 

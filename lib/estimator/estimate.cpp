@@ -165,7 +165,7 @@ Estimate invalid(const Rounds& rounds, const std::string& reason) {
   for (int id : rounds.drones) e.drones.push_back(DronePose{id, 0.0, Eigen::Vector3d::Zero(), false});
   for (int id : rounds.drones) e.unresolved.push_back(id);
   const double nan = std::nan("");
-  e.certificate = Certificate{nan, nan, nan, nan, 0};
+  e.certificate = Certificate{nan, nan, nan, nan, 0, nan};  // no SDP was solved: no bound either
   return e;
 }
 

@@ -81,7 +81,12 @@ inline int newton_unknowns(int blocks, int d, int r) {
 // `decrease`·|f| over the last kCrawlSpan steps while ‖grad‖ is still above kCrawlGrad. A level
 // whose optimum has a higher rank does that for many steps at a saddle of this rank (random
 // full-rank C, N = 32, rank 2: 19 steps at ‖grad‖ ≈ 2e-2 … 4e-2, f falling 1.5–8 % per 3 steps);
-// one that converges falls faster or reaches a small gradient. decrease = 0 never stops.
+// one that converges falls faster or reaches a small gradient. decrease = 0 never stops. The
+// fraction is of |f|, which includes the constant Σ tr C_ii (X_ii = I), so it is a heuristic: near
+// a nonzero optimum only ‖grad‖ ≤ kCrawlGrad keeps a converging run going, and a run it stops
+// wrongly only costs time (the interior point follows). A review compared watched and unwatched
+// runs on 570 instances (N = 25 … 64, the paper's plain and complex costs, random C of rank 1 … 2N,
+// C ± cI): none lost its certificate.
 constexpr int kCrawlMinSteps = 6;
 constexpr int kCrawlSpan = 3;
 constexpr double kCrawlGrad = 1e-4;
