@@ -75,6 +75,34 @@ TEST(SdpInteriorPoint, NoHandoffGapNeverHandsOff) {
   EXPECT_LT(gap_of(C, ip), 1e-7) << ip.reason;
 }
 
+// The cold start shifts Z = C + s·I by s = 1/√n, on C's scale, and by s = 2 when C + s·I is not
+// positive definite (C need not be PSD). Every feasible X has tr X = n, so C and C + κ·I have the
+// same optimal X and objectives κ·n apart: the run on an indefinite C (λ_min = −1 ≪ −1/√n, the
+// fallback's start) and the run on the PSD C + I (scaled again, 1/√n's start) must agree.
+TEST(SdpInteriorPoint, ColdStartOnAnIndefiniteCostEndsAtTheShiftedCostsOptimum) {
+  std::mt19937 rng(31);
+  std::normal_distribution<double> gauss;
+  const Eigen::Index n = 16;
+  const Eigen::VectorXd v = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 1, rng, gauss);
+  const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 4, rng, gauss);
+  Eigen::MatrixXd C = 0.2 * B * B.transpose() / B.squaredNorm() - v * v.transpose() / v.squaredNorm();
+  C /= C.norm();  // ‖C‖_F = 1, as the solver passes it
+  ASSERT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(C).eigenvalues().minCoeff(), -0.9);
+  const Eigen::MatrixXd shifted_unscaled = C + Eigen::MatrixXd::Identity(n, n);  // PSD
+  const double shifted_norm = shifted_unscaled.norm();
+  const Eigen::MatrixXd shifted = shifted_unscaled / shifted_norm;
+
+  const InteriorPointOutcome indefinite = solve_interior_point(C, 2, Options{});
+  const InteriorPointOutcome psd = solve_interior_point(shifted, 2, Options{});
+  ASSERT_TRUE(indefinite.converged) << indefinite.reason;
+  ASSERT_TRUE(psd.converged) << psd.reason;
+  expect_feasible(indefinite);
+  EXPECT_LT(gap_of(C, indefinite), 1e-7);
+  const double objective = C.cwiseProduct(indefinite.X).sum();
+  const double shifted_objective = shifted_norm * shifted.cwiseProduct(psd.X).sum() - static_cast<double>(n);
+  EXPECT_NEAR(objective, shifted_objective, 1e-7 * static_cast<double>(n));
+}
+
 // The real interior point from the rank-2 factor of the automatic solve's first attempt (noisy
 // plain form, N = 8, whose optimum has rank > 2, so the attempt does not certify): the start is
 // strictly feasible (identity blocks, X ≻ 0, C − Λ ≻ 0) and the run from it ends at the optimum

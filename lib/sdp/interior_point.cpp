@@ -1,6 +1,6 @@
 // Primal–dual interior point for  min ⟨C,X⟩  s.t.  X_ii = I_d,  X ⪰ 0.
 //
-// Feasible start (X = I, Λ = −2I so Z = C − Λ ≻ 0 because ‖C‖_F = 1; or a handed-off iterate to
+// Feasible start (X = I, Λ = −s·I so Z = C + s·I ≻ 0, cold_start_shift; or a handed-off iterate to
 // resume from, or interior_start's point near a low-rank factor), HKM search direction, Mehrotra
 // predictor–corrector. Because both residuals stay zero, ΔZ = −Aᵀ(Δy)
 // is block diagonal, which keeps every product with ΔZ at O(n² d).
@@ -128,6 +128,20 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
   return value;
 }
 
+// The cold start's dual shift s (Λ = −s·I, Z = C + s·I) for C scaled to ‖C‖_F = 1. C's eigenvalues
+// then have root mean square 1/√n, and s = 1/√n starts Z on C's own scale: s = 2 (Z dominated by
+// the shift, μ₀ ≈ 2) spent the first iterations bringing μ down to it. Sweep (4 seeds, N = 25 … 64,
+// cold start): random full rank 0.91–0.97 of the time, the paper's cost with 2N rounds 0.91–0.95,
+// the other kinds 0.98–1.01, no status changes; N = 100 / 200 random full rank 22.2 → 20.9 ms,
+// 141 → 128 ms (BENCHMARKS.md, session 27). C need not be PSD: when C + s·I fails a Cholesky test,
+// s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
+double cold_start_shift(const Eigen::MatrixXd& C) {
+  const double shift = 1.0 / std::sqrt(static_cast<double>(C.rows()));
+  Eigen::MatrixXd Z = C;  // C + s·I, factored in place (n × n)
+  Z.diagonal().array() += shift;
+  return cholesky_in_place(Z) ? shift : 2.0;
+}
+
 }  // namespace
 
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
@@ -143,10 +157,12 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   const bool exact_steps = n <= kExactStepMaxSize;
   const bool invert_x = n <= kInverseLanczosMaxSize;  // L⁻¹ of X: only the step lengths use it
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
-  Eigen::VectorXd y = -2.0 * b;                          // dual, m
+  Eigen::VectorXd y(m);                                  // dual, m
   if (resume) {
     X = resume->X;
     for (int p = 0; p < m; ++p) y[p] = resume->lambda(entries[p].u, entries[p].v % d);
+  } else {
+    y = -cold_start_shift(C) * b;
   }
   Eigen::MatrixXd lambda(n, d);                          // Aᵀ(y) as stacked d × d blocks, n × d
   lambda_from_y(y, entries, d, lambda);
