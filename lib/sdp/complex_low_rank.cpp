@@ -356,30 +356,8 @@ Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X) {
 }
 
 Eigen::MatrixXcd complex_factor(const Eigen::MatrixXcd& Z, double cutoff) {
-  const Eigen::Index N = Z.rows();
-  VectorXd rest = Z.diagonal().real();  // diagonal of Z − Y Yᴴ, N
-  const double tol = cutoff * rest.maxCoeff();
-  std::vector<bool> pivoted(N, false);
-  MatrixXcd Y = MatrixXcd::Zero(N, N);  // columns 0 … p − 1 in use
-  Eigen::Index p = 0;
-  for (; p < N; ++p) {
-    Eigen::Index pivot = -1;
-    for (Eigen::Index i = 0; i < N; ++i)
-      if (!pivoted[i] && (pivot < 0 || rest[i] > rest[pivot])) pivot = i;
-    if (!(rest[pivot] > tol)) break;
-    // Column p = (Z − Y Yᴴ) e_pivot / √rest_pivot; zero on the rows already pivoted, where
-    // Z − Y Yᴴ vanishes.
-    Y.col(p) = Z.col(pivot);
-    if (p > 0) Y.col(p).noalias() -= Y.leftCols(p) * Y.row(pivot).head(p).adjoint();
-    Y.col(p) /= std::sqrt(rest[pivot]);
-    pivoted[pivot] = true;
-    for (Eigen::Index i = 0; i < N; ++i) {
-      if (pivoted[i] && i != pivot) Y(i, p) = 0.0;
-      rest[i] -= std::norm(Y(i, p));
-    }
-  }
-  Y.conservativeResize(N, std::max<Eigen::Index>(p, 1));
-  for (Eigen::Index i = 0; i < N; ++i) {
+  MatrixXcd Y = pivoted_cholesky(Z, cutoff);
+  for (Eigen::Index i = 0; i < Y.rows(); ++i) {
     const double norm = Y.row(i).norm();
     if (norm > 0) Y.row(i) /= norm; else Y(i, 0) = 1.0;
   }

@@ -279,25 +279,4 @@ bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, c
   return false;
 }
 
-Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol) {
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(X);
-  Eigen::VectorXd w;         // eigenvalues, ascending
-  Eigen::MatrixXd vectors;   // their eigenvectors, n × n
-  if (eig.info() == Eigen::Success) {
-    w = eig.eigenvalues();
-    vectors = eig.eigenvectors();
-  } else {  // the QR iteration did not converge (its values then come unsorted): Jacobi's SVD of the
-            // symmetric PSD X always converges, singular values descending
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(X, Eigen::ComputeFullU);
-    w = svd.singularValues().reverse();
-    vectors = svd.matrixU().rowwise().reverse();
-  }
-  const double cutoff = tol * std::max(w.maxCoeff(), 0.0);
-  int r = 0;
-  while (r < w.size() && w[w.size() - 1 - r] > cutoff) ++r;
-  Eigen::MatrixXd Y(X.rows(), r);
-  for (int k = 0; k < r; ++k) Y.col(k) = vectors.col(w.size() - 1 - k) * std::sqrt(w[w.size() - 1 - k]);
-  return Y;
-}
-
 }  // namespace fact::sdp::detail

@@ -334,8 +334,20 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
                     double mix, InteriorPointOutcome& start);
 
+// Factors of a PSD X (factor.cpp).
 // The factor of largest rank r ≤ n with X = Y Yᵀ (eigenvalues below tol·max dropped).
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
+// Cholesky with diagonal pivoting of a PSD Z (n × n, real or complex): Y (n × p) with Y Yᴴ = Z on
+// the p pivot rows and columns, stopped when every remaining diagonal entry of Z − Y Yᴴ is at most
+// cutoff × Z's largest diagonal entry (the part dropped then has trace ≤ n·cutoff·max Z_ii); at
+// least one column. n p² / 2 multiply-adds instead of an eigendecomposition.
+template <class Matrix>
+Matrix pivoted_cholesky(const Matrix& Z, double cutoff);
+// X's leading part as a factor Y (n × r, columns orthogonal, largest first, ‖y_k‖² the Ritz values
+// of X): r from pivoted_cholesky at `cutoff`, one subspace-iteration step X P from its factor P,
+// then Rayleigh–Ritz on that range. O(n² r) against the full eigendecomposition's ~9 n³; what it
+// drops is X's part below the cutoff, which the interior point's hand-off truncates anyway.
+Eigen::MatrixXd leading_factor(const Eigen::MatrixXd& X, double cutoff);
 
 // Largest factor rank the staircase needs: the Pataki bound for N·d(d+1)/2 constraints.
 int pataki_rank(int blocks, int d);
@@ -421,10 +433,8 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
 // point's handoff to Newton.
 Eigen::MatrixXcd complex_factor_of(const Eigen::MatrixXd& X);
 
-// A factor Y (N × p, unit rows) of the Hermitian PSD Z (N × N) with Y Yᴴ ≈ Z: Cholesky with
-// diagonal pivoting, stopped when every remaining diagonal entry of Z − Y Yᴴ is at most cutoff ×
-// Z's largest diagonal entry (the part dropped then has trace ≤ N·cutoff·max Z_ii), rows then
-// normalised. N p² / 2 multiply-adds instead of an eigendecomposition (1 ms at N = 100).
+// A factor Y (N × p, unit rows) of the Hermitian PSD Z (N × N) with Y Yᴴ ≈ Z: pivoted_cholesky
+// at `cutoff`, rows then normalised (an eigendecomposition took 1 ms at N = 100).
 Eigen::MatrixXcd complex_factor(const Eigen::MatrixXcd& Z, double cutoff);
 
 struct ComplexInteriorPointOutcome {

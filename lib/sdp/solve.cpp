@@ -31,6 +31,13 @@ constexpr int kMaxPolishSize = 2000;
 // cost with 2N rounds to 0.73 / 0.87 / 0.73, with the same statuses (BENCHMARKS.md, session 24).
 constexpr double kHandoffGap = 1e-5;
 constexpr int kEarlyPolishSteps = 3;
+// The hand-off's factor of X: leading_factor at this cutoff (of X's diagonal, which is 1), whose
+// Ritz values polish_size then cuts at 1e-6 of the largest, as it cut X's eigenvalues when the
+// factor came from a full eigendecomposition. Sweep (4 seeds, N = 8 … 64, all kinds; fastest of 3,
+// two runs): random full rank 0.98 / 0.95 / 0.93 / 0.92 of the time at N = 8 / 16 / 32 / 64, the
+// paper's cost with 2N rounds 0.98 / 0.96 / 0.94 / 0.95, no status or iteration-count changes
+// (BENCHMARKS.md, session 27).
+constexpr double kHandoffFactorCutoff = 1e-6;
 // The real interior point starts from the rank-d attempt's factor up to this many rows (below).
 constexpr int kWarmStartMaxRows = 48;
 // Above kWarmStartMaxRows the rank-d attempt stops when it crawls (from_low_rank). Sweep (4 seeds,
@@ -404,7 +411,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
         complex_polish(C, detail::hermitian_of(C), detail::complex_factor_of(ip.X), ip.iterations, kComplexPolishSteps);
   } else {
     Candidate handed;  // only the factor: polish certifies its own result
-    handed.Y = detail::factor_psd(ip.X, 0.0);
+    handed.Y = detail::leading_factor(ip.X, kHandoffFactorCutoff);
     handed.iterations = ip.iterations;
     handed.method = Method::interior_point;
     polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, o);
