@@ -354,6 +354,40 @@ TEST(SdpKernels, PivotedRankCountsPsdRankAndSeesIndefiniteMatrices) {
   EXPECT_EQ(fact::sdp::detail::pivoted_rank(mixed), 8);
 }
 
+// The hand-off's factors: pivoted_cholesky reproduces a PSD X of exact rank r with r columns, and
+// leading_factor of X = (rank-r part with eigenvalues 1 … 8) + (a part of eigenvalues ≤ 1e-9)
+// keeps r columns, orthogonal, largest first, whose squared norms are the r large eigenvalues
+// and whose Y Yᵀ is the rank-r part to within the dropped one; factor_psd at the same cutoff
+// agrees with it.
+TEST(SdpKernels, PivotedAndLeadingFactorsKeepTheLeadingPartOfX) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::Index n = 20;
+  const int r = 5;
+  const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+  const Eigen::MatrixXd V = Eigen::HouseholderQR<Eigen::MatrixXd>(G).householderQ();  // orthogonal, n × n
+  Eigen::VectorXd values(n);
+  for (Eigen::Index k = 0; k < n; ++k) values[k] = k < r ? 8.0 - 1.75 * static_cast<double>(k) : 1e-9 / (1.0 + k);
+  const Eigen::MatrixXd large = V.leftCols(r) * values.head(r).asDiagonal() * V.leftCols(r).transpose();
+  const Eigen::MatrixXd X = large + V.rightCols(n - r) * values.tail(n - r).asDiagonal() * V.rightCols(n - r).transpose();
+
+  const Eigen::MatrixXd P = fact::sdp::detail::pivoted_cholesky(large, 1e-12);
+  EXPECT_EQ(P.cols(), r);
+  EXPECT_LT((P * P.transpose() - large).cwiseAbs().maxCoeff(), 1e-12);
+
+  const Eigen::MatrixXd Y = fact::sdp::detail::leading_factor(X, 1e-6);
+  ASSERT_EQ(Y.cols(), r);
+  const Eigen::MatrixXd gram = Y.transpose() * Y;  // r × r: diag(values) for orthogonal columns
+  for (int k = 0; k < r; ++k) {
+    EXPECT_NEAR(gram(k, k), values[k], 1e-10) << "column " << k;
+    for (int l = 0; l < k; ++l) EXPECT_NEAR(gram(k, l), 0.0, 1e-10) << "columns " << k << ", " << l;
+  }
+  EXPECT_LT((Y * Y.transpose() - large).cwiseAbs().maxCoeff(), 1e-9);
+  const Eigen::MatrixXd E = fact::sdp::detail::factor_psd(X, 1e-6);
+  ASSERT_EQ(E.cols(), r);
+  EXPECT_LT((E * E.transpose() - Y * Y.transpose()).cwiseAbs().maxCoeff(), 1e-9);
+}
+
 // Newton's system in Schur form against the one in tangent bases (newton_refine's NewtonSystem):
 // the damped system Proj(S V) + λV = −S Y is the same, so from a point near a rank-r optimum one
 // step of each lands at the same factor, and from farther out both converge to the same optimum.
