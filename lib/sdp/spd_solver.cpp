@@ -3,22 +3,18 @@
 
 #include <limits>
 
+#include "internal.h"
 #include "step_length.h"
 
 namespace fact::sdp::detail {
 
-SpdSolver::SpdSolver(Eigen::Index n) {
-  if (n <= kSmallSpdSize)
-    L_.resize(n, n);
-  else
-    llt_ = Eigen::LLT<Eigen::MatrixXd>(n);
-}
+SpdSolver::SpdSolver(Eigen::Index n) : L_(n, n) {}
 
 bool SpdSolver::factor(const Eigen::MatrixXd& A) {
   small_ = A.rows() <= kSmallSpdSize;
   if (!small_) {
-    llt_.compute(A);
-    factored_ = llt_.info() == Eigen::Success;
+    L_ = A;
+    factored_ = cholesky_in_place(L_);
   } else {
     L_.resize(A.rows(), A.cols());
     factored_ = cholesky_lower(A, L_);
@@ -33,7 +29,9 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     return;
   }
   if (!small_) {
-    x = llt_.solve(b);
+    if (&x != &b) x = b;
+    L_.triangularView<Eigen::Lower>().solveInPlace(x);
+    L_.triangularView<Eigen::Lower>().transpose().solveInPlace(x);
     return;
   }
   const Eigen::Index n = L_.rows();
