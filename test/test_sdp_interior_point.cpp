@@ -493,4 +493,43 @@ TEST(SdpNewton, RankTwoAttemptStopsCrawlingOnFullRankButNotOnLowRank) {
   }
 }
 
+// The rank-2 attempt that automatic mode hands to the interior point skips S's spectrum only
+// when its gradient proves λ_min(S) < −psd_tol: on random C of full rank (N = 64) the crawl
+// watch stops it far from a critical point, and its certificate comes without eigenvalues, NaN
+// for λ_min and the bound, and the Λ of the same factor, whose S (computed here) has λ_min below
+// −psd_tol indeed; on C of rank 3 (zero optimum of rank 2) it converges, certifies and keeps its
+// spectrum.
+TEST(SdpNewton, RankTwoAttemptSkipsTheSpectrumOnlyWhenItsGradientRulesTheCertificateOut) {
+  std::mt19937 rng(37);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Options rank_two;
+  rank_two.method = fact::sdp::Method::low_rank;
+  rank_two.max_rank = 2;
+  rank_two.max_newton_iterations = 25;
+  for (int columns : {128, 3}) {
+    SCOPED_TRACE("C = B Bᵀ, B 128 × " + std::to_string(columns));
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(128, columns, rng, gauss);
+    const Eigen::MatrixXd C = B * B.transpose() / (B * B.transpose()).norm();
+    const auto full = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1);
+    const auto skipping = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1, true);
+    EXPECT_EQ(skipping.certified, full.certified);
+    EXPECT_EQ(skipping.iterations, full.iterations);
+    EXPECT_EQ((skipping.Y - full.Y).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((skipping.certificate.lambda - full.certificate.lambda).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_NEAR(skipping.certificate.trace_lambda, full.certificate.trace_lambda, 1e-15);
+    if (columns == 128) {
+      ASSERT_FALSE(full.certified);
+      EXPECT_EQ(skipping.certificate.eigenvalues.size(), 0);
+      EXPECT_TRUE(std::isnan(skipping.certificate.min_eig) && std::isnan(skipping.certificate.dual_bound) &&
+                  std::isnan(skipping.certificate.bound_error));
+      const Eigen::MatrixXd S = fact::sdp::detail::certificate_matrix(C, skipping.certificate.lambda, 2);
+      EXPECT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S).eigenvalues().minCoeff(), -rank_two.psd_tol);
+    } else {
+      EXPECT_TRUE(skipping.certified);
+      EXPECT_EQ(skipping.certificate.eigenvalues.size(), 128);
+      EXPECT_EQ(skipping.certificate.min_eig, full.certificate.min_eig);
+    }
+  }
+}
+
 }  // namespace

@@ -1,6 +1,7 @@
 // Burer–Monteiro Riemannian staircase with block-coordinate minimisation.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "internal.h"
@@ -117,7 +118,34 @@ static Eigen::MatrixXd spectral_factor(const Eigen::MatrixXd& C, int d, unsigned
   return Y;
 }
 
-LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease) {
+namespace {
+
+// True when λ_min(S) < −ε is proved by S Y alone (S = C − Λ(Y), n × n, for a feasible Y, n × r,
+// with Λ(Y) from Y itself: S Y is half the Riemannian gradient). Then ⟨S, Y Yᵀ⟩ = 0 and
+// tr Y Yᵀ = n, so S + εI ⪰ 0 would give ‖(S + εI) Y‖²_F ≤ ‖S + εI‖₂·⟨S + εI, Y Yᵀ⟩ ≤
+// (‖S‖_F + ε)·ε n, that is ‖S Y‖_F ≤ √((‖S‖_F + ε) ε n) + ε √n; a gradient above twice that (the
+// factor covers rounding in ⟨S, Y Yᵀ⟩ and in Y's feasibility) rules the certificate out. O(n² r),
+// and free of cost where it does not decide: a converged factor's S Y is at rounding level.
+bool provably_indefinite(const Eigen::MatrixXd& S, const Eigen::MatrixXd& Y, double eps) {
+  const double n = static_cast<double>(S.rows());
+  const double limit = std::sqrt((S.norm() + eps) * eps * n) + eps * std::sqrt(n);
+  return (S * Y).norm() > 2.0 * limit;
+}
+
+// The certificate of a factor that cannot certify (provably_indefinite): Λ and tr Λ, no
+// spectrum, and NaN for λ_min, the bound and its error.
+Certificate without_spectrum(const Eigen::MatrixXd& lambda, int d) {
+  Certificate cert;
+  cert.lambda = lambda;
+  for (Eigen::Index i = 0; i < lambda.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
+  cert.min_eig = cert.dual_bound = cert.bound_error = std::numeric_limits<double>::quiet_NaN();
+  return cert;
+}
+
+}  // namespace
+
+LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease,
+                              bool spectrum_only_if_certifiable) {
   const Eigen::Index n = C.rows();
   const int blocks = static_cast<int>(n / d);
   const int max_rank = options.max_rank > 0 ? options.max_rank : std::min<int>(pataki_rank(blocks, d), n);
@@ -128,6 +156,11 @@ LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& op
     out.iterations +=
         newton_refine(C, d, out.Y, options.max_newton_iterations, 1e-12, NewtonSystem::automatic, crawl_decrease);
     const Eigen::MatrixXd lambda = lambda_from_factor(C, out.Y, d);
+    if (spectrum_only_if_certifiable && out.Y.cols() >= max_rank &&
+        provably_indefinite(certificate_matrix(C, lambda, d), out.Y, options.psd_tol)) {
+      out.certificate = without_spectrum(lambda, d);
+      return out;
+    }
     out.certificate = certify(C, lambda, d, false);
     out.certified = out.certificate.min_eig >= -options.psd_tol;
     if (out.certified || out.Y.cols() >= max_rank) return out;

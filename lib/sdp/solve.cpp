@@ -202,7 +202,9 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
     o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
     if (C.rows() > kWarmStartMaxRows) crawl_decrease = kRankDCrawlDecrease;
   }
-  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o, crawl_decrease);
+  // (automatic mode goes on to the interior point when the attempt does not certify, and a
+  // certificate without a spectrum never replaces its result)
+  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o, crawl_decrease, o.method == Method::automatic);
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
   return with_one_more_step(C, d, std::move(c), o);
