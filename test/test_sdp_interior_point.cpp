@@ -314,13 +314,14 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
   }
 }
 
-// SpdSolver on both of its paths (plain loops to 64 rows, Eigen's LLT above, and back): x = A⁻¹ b
-// for A = B Bᵀ + n I, with x aliasing b; false and a NaN solution for an indefinite A.
+// SpdSolver on both of its paths (cholesky_lower to 64 rows, right-looking below 24 and by columns
+// from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for A = B Bᵀ + n I, with
+// x aliasing b; false and a NaN solution for an indefinite A.
 TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   fact::sdp::detail::SpdSolver solver(3);
-  for (int n : {1, 10, 64, 65, 100, 7}) {
+  for (int n : {1, 10, 23, 24, 64, 65, 100, 7}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);

@@ -111,8 +111,31 @@ void times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, in
     times_block_diagonal_fixed<2>(P, D, out);
 }
 
+namespace {
+
+// Left-looking: column j of L is A's below the diagonal less L(j:n, 0:j)·L(j, 0:j)ᵀ, one
+// matrix–vector product (Eigen's kernel) a column.
+bool cholesky_lower_by_columns(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
+  const Eigen::Index n = A.rows();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const Eigen::Index rest = n - j;
+    auto column = L.col(j).tail(rest);
+    column = A.col(j).tail(rest);
+    if (j > 0) column.noalias() -= L.block(j, 0, rest, j) * L.row(j).head(j).transpose();
+    const double pivot = column[0];
+    if (!(pivot > 0)) return false;
+    const double root = std::sqrt(pivot);
+    column[0] = root;
+    column.tail(rest - 1) /= root;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
   const Eigen::Index n = A.rows();
+  if (n >= kColumnCholeskyMinSize) return cholesky_lower_by_columns(A, L);
   for (Eigen::Index j = 0; j < n; ++j)  // the lower triangle of A, column by column
     std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
   for (Eigen::Index k = 0; k < n; ++k) {  // right-looking: column k, then the trailing columns

@@ -31,7 +31,11 @@ constexpr int kInverseLanczosMaxSize = 96;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
 // (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
-// the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead.
+// the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead:
+// right-looking below kColumnCholeskyMinSize, left-looking by matrix–vector products from it
+// (n = 24 / 32 / 48 / 64: 0.72 / 1.24 / 3.2 / 6.5 µs right-looking, 0.63 / 1.03 / 2.3 / 4.2 µs
+// left-looking; n = 16: 0.33 against 0.35; BENCHMARKS.md, session 27).
+constexpr Eigen::Index kColumnCholeskyMinSize = 24;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
