@@ -103,6 +103,37 @@ TEST(SdpInteriorPoint, ColdStartOnAnIndefiniteCostEndsAtTheShiftedCostsOptimum) 
   EXPECT_NEAR(objective, shifted_objective, 1e-7 * static_cast<double>(n));
 }
 
+// A cost whose λ_min is −1/√n after scaling (a rotated reflection R = Q diag(−1, 1, …, 1) Qᵀ,
+// n = 8): C + I/√n is singular, and when rounding let it pass the Cholesky test the interior
+// point started from a nearly singular Z and stalled at a relative gap of 3e-4 (d = 1) and 3e-2
+// (d = 2), not certified (review, session 27). The shift is now taken only when C + (s/2)·I passes,
+// so these start from s = 2 and certify, as before the change, through the explicit interior
+// point and through automatic mode.
+TEST(SdpInteriorPoint, ColdStartNextToTheShiftsEdgeStillCertifies) {
+  const int n = 8;
+  std::mt19937 rng(3008);
+  std::normal_distribution<double> gauss;
+  Eigen::MatrixXd G(n, n);  // Gaussian, drawn row by row (the review's reproducer)
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) G(i, j) = gauss(rng);
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(G).householderQ();  // orthogonal, n × n
+  Eigen::VectorXd signs = Eigen::VectorXd::Ones(n);
+  signs[0] = -1.0;
+  Eigen::MatrixXd R = Q * signs.asDiagonal() * Q.transpose();
+  R = (0.5 * (R + R.transpose())).eval();
+  ASSERT_NEAR(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(R / R.norm()).eigenvalues()[0], -1.0 / std::sqrt(n), 1e-14);
+  for (int d : {1, 2}) {
+    SCOPED_TRACE("d = " + std::to_string(d));
+    Options interior;
+    interior.method = fact::sdp::Method::interior_point;
+    for (const Options& o : {interior, Options{}}) {
+      const fact::sdp::Result r = fact::sdp::solve(R, d, o);
+      EXPECT_TRUE(r.certified()) << fact::sdp::to_string(r.status) << ": " << r.reason;
+      EXPECT_LT(r.rel_gap, 1e-9);
+    }
+  }
+}
+
 // The real interior point from the rank-2 factor of the automatic solve's first attempt (noisy
 // plain form, N = 8, whose optimum has rank > 2, so the attempt does not certify): the start is
 // strictly feasible (identity blocks, X ≻ 0, C − Λ ≻ 0) and the run from it ends at the optimum

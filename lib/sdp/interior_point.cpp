@@ -133,12 +133,14 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
 // the shift, μ₀ ≈ 2) spent the first iterations bringing μ down to it. Sweep (4 seeds, N = 25 … 64,
 // cold start): random full rank 0.91–0.97 of the time, the paper's cost with 2N rounds 0.91–0.95,
 // the other kinds 0.98–1.01, no status changes; N = 100 / 200 random full rank 22.2 → 20.9 ms,
-// 141 → 128 ms (BENCHMARKS.md, session 27). C need not be PSD: when C + s·I fails a Cholesky test,
-// s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
+// 141 → 128 ms (BENCHMARKS.md, session 27). C need not be PSD: s is taken only when C + (s/2)·I
+// passes a Cholesky test, so that λ_min(Z) ≥ s/2 (a Z that only just passed, λ_min(C) at −s, left
+// the interior point stalled at a gap of 1e-4 … 1e-2 from a nearly singular start: review, session
+// 27); otherwise s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
 double cold_start_shift(const Eigen::MatrixXd& C) {
   const double shift = 1.0 / std::sqrt(static_cast<double>(C.rows()));
-  Eigen::MatrixXd Z = C;  // C + s·I, factored in place (n × n)
-  Z.diagonal().array() += shift;
+  Eigen::MatrixXd Z = C;  // C + (s/2)·I, factored in place (n × n)
+  Z.diagonal().array() += 0.5 * shift;
   return cholesky_in_place(Z) ? shift : 2.0;
 }
 

@@ -270,7 +270,8 @@ struct LowRankOutcome {
 // negative eigenvalue, add a column along its eigenvector and continue, up to max_rank. Each
 // level's Newton run stops early when it crawls (newton_refine's crawl_decrease). With
 // spectrum_only_if_certifiable, a last level whose gradient alone proves λ_min(S) < −psd_tol
-// (low_rank.cpp, provably_indefinite: a run the crawl watch stopped) skips S's spectrum: its
+// (low_rank.cpp, provably_indefinite: a run stopped far from a critical point, by the crawl watch
+// or by its step cap) skips S's spectrum: its
 // certificate has Λ and tr Λ, no eigenvalues, and NaN for λ_min and the bound, for a caller that
 // goes on to another method.
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease = 0,

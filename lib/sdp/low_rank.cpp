@@ -127,6 +127,7 @@ namespace {
 // factor covers rounding in ⟨S, Y Yᵀ⟩ and in Y's feasibility) rules the certificate out. O(n² r),
 // and free of cost where it does not decide: a converged factor's S Y is at rounding level.
 bool provably_indefinite(const Eigen::MatrixXd& S, const Eigen::MatrixXd& Y, double eps) {
+  if (!(eps > 0)) return false;  // at ε = 0 the limit is 0, and rounding in S Y alone would pass it
   const double n = static_cast<double>(S.rows());
   const double limit = std::sqrt((S.norm() + eps) * eps * n) + eps * std::sqrt(n);
   return (S * Y).norm() > 2.0 * limit;

@@ -344,9 +344,9 @@ Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPo
   return c;
 }
 
-// The factor rank and Newton-system size the polish uses for Y (n × r, X's eigenvectors
-// scaled by √eigenvalue, largest first): the columns with eigenvalue above 1e-6 of the
-// largest, at most the Pataki bound.
+// The factor rank and Newton-system size the polish uses for Y (n × r, orthogonal columns
+// largest first, ‖y_k‖² X's eigenvalues or, from leading_factor at the hand-off, its Ritz
+// values): the columns with a value above 1e-6 of the largest, at most the Pataki bound.
 struct PolishSize {
   int rank = 0;
   int unknowns = 0;  // of the Newton system newton_refine factors (detail::newton_unknowns)
