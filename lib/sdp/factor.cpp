@@ -32,31 +32,39 @@ Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol) {
 }
 
 template <class Matrix>
-Matrix pivoted_cholesky(const Matrix& Z, double cutoff) {
+PivotedCholesky<Matrix> pivoted_cholesky_above(const Matrix& Z, double tol) {
   const Eigen::Index n = Z.rows();
-  Eigen::VectorXd rest = Z.diagonal().real();  // diagonal of Z − Y Yᴴ, n
-  const double tol = cutoff * rest.maxCoeff();
-  std::vector<bool> pivoted(n, false);
-  Matrix Y = Matrix::Zero(n, n);  // columns 0 … p − 1 in use
-  Eigen::Index p = 0;
-  for (; p < n; ++p) {
+  PivotedCholesky<Matrix> f;
+  f.Y = Matrix::Zero(n, n);
+  f.rest = Z.diagonal().real();
+  f.pivoted.assign(n, false);
+  for (Eigen::Index& p = f.rank; p < n; ++p) {
     Eigen::Index pivot = -1;
     for (Eigen::Index i = 0; i < n; ++i)
-      if (!pivoted[i] && (pivot < 0 || rest[i] > rest[pivot])) pivot = i;
-    if (!(rest[pivot] > tol)) break;
+      if (!f.pivoted[i] && (pivot < 0 || f.rest[i] > f.rest[pivot])) pivot = i;
+    if (!(f.rest[pivot] > tol)) break;
     // Column p = (Z − Y Yᴴ) e_pivot / √rest_pivot; zero on the rows already pivoted, where
     // Z − Y Yᴴ vanishes.
-    Y.col(p) = Z.col(pivot);
-    if (p > 0) Y.col(p).noalias() -= Y.leftCols(p) * Y.row(pivot).head(p).adjoint();
-    Y.col(p) /= std::sqrt(rest[pivot]);
-    pivoted[pivot] = true;
+    f.Y.col(p) = Z.col(pivot);
+    if (p > 0) f.Y.col(p).noalias() -= f.Y.leftCols(p) * f.Y.row(pivot).head(p).adjoint();
+    f.Y.col(p) /= std::sqrt(f.rest[pivot]);
+    f.pivoted[pivot] = true;
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (pivoted[i] && i != pivot) Y(i, p) = 0.0;
-      rest[i] -= std::norm(Y(i, p));
+      if (f.pivoted[i] && i != pivot) f.Y(i, p) = 0.0;
+      f.rest[i] -= std::norm(f.Y(i, p));
     }
   }
-  Y.conservativeResize(n, std::max<Eigen::Index>(p, 1));
-  return Y;
+  return f;
+}
+
+template PivotedCholesky<Eigen::MatrixXd> pivoted_cholesky_above(const Eigen::MatrixXd& Z, double tol);
+template PivotedCholesky<Eigen::MatrixXcd> pivoted_cholesky_above(const Eigen::MatrixXcd& Z, double tol);
+
+template <class Matrix>
+Matrix pivoted_cholesky(const Matrix& Z, double cutoff) {
+  PivotedCholesky<Matrix> f = pivoted_cholesky_above(Z, cutoff * Z.diagonal().real().maxCoeff());
+  f.Y.conservativeResize(Z.rows(), std::max<Eigen::Index>(f.rank, 1));
+  return f.Y;
 }
 
 template Eigen::MatrixXd pivoted_cholesky(const Eigen::MatrixXd& Z, double cutoff);

@@ -343,10 +343,22 @@ bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, c
 // Factors of a PSD X (factor.cpp).
 // The factor of largest rank r ≤ n with X = Y Yᵀ (eigenvalues below tol·max dropped).
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);
-// Cholesky with diagonal pivoting of a PSD Z (n × n, real or complex): Y (n × p) with Y Yᴴ = Z on
-// the p pivot rows and columns, stopped when every remaining diagonal entry of Z − Y Yᴴ is at most
-// cutoff × Z's largest diagonal entry (the part dropped then has trace ≤ n·cutoff·max Z_ii); at
-// least one column. n p² / 2 multiply-adds instead of an eigendecomposition.
+// Cholesky with diagonal pivoting of a self-adjoint Z (n × n, real or complex), column after
+// column while the largest remaining diagonal entry of Z − Y Yᴴ on the rows not yet pivoted is
+// above tol. Y Yᴴ = Z on the `rank` pivot rows and columns.
+template <class Matrix>
+struct PivotedCholesky {
+  Matrix Y;                   // n × n, columns 0 … rank − 1 in use; column p is zero on the rows
+                              // pivoted before it
+  Eigen::VectorXd rest;       // diagonal of Z − Y Yᴴ, n (rounding only, on the pivoted rows)
+  std::vector<bool> pivoted;  // the rows chosen as pivots, n
+  Eigen::Index rank = 0;
+};
+template <class Matrix>
+PivotedCholesky<Matrix> pivoted_cholesky_above(const Matrix& Z, double tol);
+// Its factor for a PSD Z: Y (n × p, at least one column) stopped when every remaining diagonal
+// entry is at most cutoff × Z's largest diagonal entry (the part dropped then has trace
+// ≤ n·cutoff·max Z_ii). n p² / 2 multiply-adds instead of an eigendecomposition.
 template <class Matrix>
 Matrix pivoted_cholesky(const Matrix& Z, double cutoff);
 // X's leading part as a factor Y (n × r, columns orthogonal, largest first, ‖y_k‖² the Ritz values

@@ -176,29 +176,18 @@ NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d) {
 
 int pivoted_rank(const Eigen::MatrixXd& C) {
   const Eigen::Index n = C.rows();
-  VectorXd rest = C.diagonal();  // diagonal of C − L Lᵀ, n
-  const double tol = eigensolver_error(n, rest.cwiseAbs().maxCoeff());
-  MatrixXd L(n, n);  // columns 0 … r − 1 in use
-  std::vector<bool> pivoted(n, false);
-  Eigen::Index r = 0;
-  for (; r < n; ++r) {
-    Eigen::Index pivot = -1;
-    for (Eigen::Index i = 0; i < n; ++i)
-      if (!pivoted[i] && (pivot < 0 || rest[i] > rest[pivot])) pivot = i;
-    if (!(rest[pivot] > tol)) break;
-    L.col(r) = C.col(pivot);
-    if (r > 0) L.col(r).noalias() -= L.leftCols(r) * L.row(pivot).head(r).transpose();
-    L.col(r) /= std::sqrt(rest[pivot]);
-    pivoted[pivot] = true;
-    for (Eigen::Index i = 0; i < n; ++i) rest[i] = pivoted[i] ? 0.0 : rest[i] - L(i, r) * L(i, r);
-  }
+  const double tol = eigensolver_error(n, C.diagonal().cwiseAbs().maxCoeff());
+  const PivotedCholesky<MatrixXd> f = pivoted_cholesky_above(C, tol);
+  const Eigen::Index r = f.rank;
+  const auto& L = f.Y;  // C = L Lᵀ on the pivot rows and columns, n × r in use
   const int not_psd = static_cast<int>(n);
-  if ((rest.array() < -tol).any()) return not_psd;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!f.pivoted[i] && f.rest[i] < -tol) return not_psd;
   // The remainder C − L Lᵀ on the rows not pivoted: PSD with a diagonal ≤ tol only if every entry
   // is (|a_ij| ≤ √(a_ii a_jj)); an indefinite C with a small diagonal stops early otherwise.
   for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index i = j + 1; !pivoted[j] && i < n; ++i)
-      if (!pivoted[i] && std::abs(C(i, j) - L.row(i).head(r).dot(L.row(j).head(r))) > tol) return not_psd;
+    for (Eigen::Index i = j + 1; !f.pivoted[j] && i < n; ++i)
+      if (!f.pivoted[i] && std::abs(C(i, j) - L.row(i).head(r).dot(L.row(j).head(r))) > tol) return not_psd;
   return static_cast<int>(r);
 }
 
