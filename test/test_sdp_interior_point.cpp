@@ -30,6 +30,24 @@ Eigen::MatrixXd scaled_plain_cost(int drones, std::uint64_t seed) {
   return C / C.norm();
 }
 
+// The options of automatic mode's rank-2 attempt, for solve_low_rank called directly: rank 2
+// only, at most 25 Newton steps.
+Options rank_two_attempt() {
+  Options o;
+  o.method = fact::sdp::Method::low_rank;
+  o.max_rank = 2;
+  o.max_newton_iterations = 25;
+  return o;
+}
+
+// C = B Bᵀ for a Gaussian B (n × columns, drawn from rng), scaled to ‖C‖_F = 1.
+Eigen::MatrixXd scaled_random_psd(Eigen::Index n, Eigen::Index columns, std::mt19937& rng,
+                                  std::normal_distribution<double>& gauss) {
+  const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, columns, rng, gauss);
+  const Eigen::MatrixXd C = B * B.transpose();
+  return C / C.norm();
+}
+
 // ⟨C, X⟩ − tr Λ = ⟨X, C − blkdiag(Λ)⟩: the duality gap of a feasible iterate.
 double gap_of(const Eigen::MatrixXd& C, const InteriorPointOutcome& ip) {
   const double primal = C.cwiseProduct(ip.X).sum();
@@ -140,10 +158,7 @@ TEST(SdpInteriorPoint, ColdStartNextToTheShiftsEdgeStillCertifies) {
 // of the run from X = I. Multipliers that no shift up to 1 makes dual feasible give no start.
 TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
   const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
-  Options rank_two;
-  rank_two.method = fact::sdp::Method::low_rank;
-  rank_two.max_rank = 2;
-  rank_two.max_newton_iterations = 25;
+  const Options rank_two = rank_two_attempt();
   const fact::sdp::detail::LowRankOutcome attempt = fact::sdp::detail::solve_low_rank(C, 2, rank_two);
   ASSERT_FALSE(attempt.certified);
   ASSERT_EQ(attempt.Y.cols(), 2);
@@ -502,14 +517,10 @@ TEST(SdpNewton, CrawlWatchStopsOnlyASlowRunWithALargeGradient) {
 TEST(SdpNewton, RankTwoAttemptStopsCrawlingOnFullRankButNotOnLowRank) {
   std::mt19937 rng(31);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Options rank_two;
-  rank_two.method = fact::sdp::Method::low_rank;
-  rank_two.max_rank = 2;
-  rank_two.max_newton_iterations = 25;
+  const Options rank_two = rank_two_attempt();
   for (int columns : {64, 3}) {
     SCOPED_TRACE("C = B Bᵀ, B 64 × " + std::to_string(columns));
-    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(64, columns, rng, gauss);
-    const Eigen::MatrixXd C = B * B.transpose() / (B * B.transpose()).norm();
+    const Eigen::MatrixXd C = scaled_random_psd(64, columns, rng, gauss);
     const auto unwatched = fact::sdp::detail::solve_low_rank(C, 2, rank_two);
     const auto watched = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1);
     EXPECT_EQ(watched.certified, unwatched.certified);
@@ -534,14 +545,10 @@ TEST(SdpNewton, RankTwoAttemptStopsCrawlingOnFullRankButNotOnLowRank) {
 TEST(SdpNewton, RankTwoAttemptSkipsTheSpectrumOnlyWhenItsGradientRulesTheCertificateOut) {
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Options rank_two;
-  rank_two.method = fact::sdp::Method::low_rank;
-  rank_two.max_rank = 2;
-  rank_two.max_newton_iterations = 25;
+  const Options rank_two = rank_two_attempt();
   for (int columns : {128, 3}) {
     SCOPED_TRACE("C = B Bᵀ, B 128 × " + std::to_string(columns));
-    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(128, columns, rng, gauss);
-    const Eigen::MatrixXd C = B * B.transpose() / (B * B.transpose()).norm();
+    const Eigen::MatrixXd C = scaled_random_psd(128, columns, rng, gauss);
     const auto full = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1);
     const auto skipping = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.1, true);
     EXPECT_EQ(skipping.certified, full.certified);
