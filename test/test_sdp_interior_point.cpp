@@ -360,6 +360,46 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
   }
 }
 
+// The exact step lengths (n ≤ 48; the predictor's, τ = 1, below n = 24) against α_max = −1/λ_min of
+// L⁻¹ΔL⁻ᵀ from Eigen: never beyond τ·α_max, and short of it by at most the bound's tolerance (1e-2
+// for the predictor, 1e-3 for the corrector); for a full Δ, a block-diagonal one, and Δ = −c·P,
+// whose B = −c·I has one eigenvalue n times.
+TEST(SdpKernels, ExactStepLengthsStopWithinTheirToleranceOfTheBoundary) {
+  using fact::sdp::detail::StepLength;
+  std::mt19937 rng(31);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {4, 10, 16, 24, 34, 48}) {
+    const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd P = B * B.transpose() / n + 0.1 * Eigen::MatrixXd::Identity(n, n);  // n × n, ≻ 0
+    const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    Eigen::MatrixXd L = P, L_inv(n, n);
+    ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
+    fact::sdp::detail::invert_lower_factor(L, L_inv);
+    Eigen::MatrixXd blocks = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 2, rng, gauss);  // n × 2
+    for (int i = 0; i < n; i += 2) blocks(i + 1, 0) = blocks(i, 1);  // symmetric 2 × 2 blocks, stacked
+    for (int kind = 0; kind < 3; ++kind) {
+      SCOPED_TRACE("n = " + std::to_string(n) + ", Δ kind " + std::to_string(kind));
+      Eigen::MatrixXd delta = kind == 0 ? Eigen::MatrixXd(G + G.transpose()) : Eigen::MatrixXd(-3.0 * P);  // n × n
+      if (kind == 1) {
+        delta.setZero();
+        for (int i = 0; i < n; i += 2) delta.block(i, i, 2, 2) = blocks.middleRows(i, 2);
+      }
+      const Eigen::MatrixXd Bmat = L_inv * delta * L_inv.transpose();
+      const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Bmat, Eigen::EigenvaluesOnly).eigenvalues()[0];
+      ASSERT_LT(lowest, -1.0);  // the boundary is inside the full step
+      const double alpha_max = -1.0 / lowest;
+      StepLength steps(n);
+      for (double tau : {1.0, 0.95}) {
+        if (tau == 1.0 && n >= fact::sdp::detail::kPredictorLanczosMinSize) continue;  // a Lanczos estimate there
+        const double alpha = kind == 1 ? steps.block_diagonal(P, L, L_inv, blocks, 2, tau) : steps.full(P, L, L_inv, delta, tau);
+        const double tolerance = tau == 1.0 ? 1e-2 : 1e-3;
+        EXPECT_LE(alpha, tau * alpha_max * (1 + 1e-12)) << "τ = " << tau;
+        EXPECT_GE(alpha, tau * alpha_max / (1 + tolerance) * (1 - 1e-12)) << "τ = " << tau;
+      }
+    }
+  }
+}
+
 // SpdSolver on both of its paths (cholesky_lower to 64 rows, right-looking below 24 and by columns
 // from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for A = B Bᵀ + n I, with
 // x aliasing b; false and a NaN solution for an indefinite A.

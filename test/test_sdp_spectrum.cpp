@@ -38,10 +38,11 @@ Eigen::MatrixXcd hermitian_test_matrix(int n, std::mt19937& rng, std::normal_dis
   return B * B.adjoint() - 0.5 * Eigen::MatrixXcd::Identity(n, n);
 }
 
+// Every size of the padded reduction (n ≤ 64, padded to 8, 12, … 64) and the in-place one above.
 TEST(SdpSpectrum, RealEigenvaluesMatchEigen) {
   std::mt19937 rng(3);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n = 1; n <= 40; ++n) {
+  for (int n = 1; n <= 70; ++n) {
     for (int kind = 0; kind < 3; ++kind) {
       SCOPED_TRACE("n = " + std::to_string(n) + ", kind " + std::to_string(kind));
       const Eigen::MatrixXd A = real_test_matrix(n, kind, 1e3, rng, gauss);
@@ -66,6 +67,59 @@ TEST(SdpSpectrum, HermitianEigenvaluesMatchEigen) {
     const Eigen::VectorXd ours = eigenvalues_of(A);
     ASSERT_EQ(ours.size(), n);
     EXPECT_LT(relative_difference(ours, reference), 1e-13);
+  }
+}
+
+// The reduction reads A's lower triangle only (the upper one holds anything), on the padded path
+// (n ≤ 64) and in place (n > 64), and a matrix that is already diagonal or tridiagonal (no
+// reflection at some steps) keeps its eigenvalues.
+TEST(SdpSpectrum, ReductionReadsTheLowerTriangleAndKeepsReducedColumns) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {3, 7, 8, 9, 16, 33, 48, 64, 65, 80}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd A = real_test_matrix(n, 0, 0.0, rng, gauss);
+    Eigen::MatrixXd marred = A;  // A's lower triangle, garbage above
+    marred.triangularView<Eigen::StrictlyUpper>() = 1e3 * Eigen::MatrixXd::Ones(n, n);
+    Eigen::VectorXd diagonal(n), subdiagonal(n), scratch(2 * n);
+    fact::sdp::detail::tridiagonalize(marred, diagonal, subdiagonal, scratch);
+    Eigen::VectorXd squares = subdiagonal.cwiseAbs2();
+    ASSERT_TRUE(fact::sdp::detail::tridiagonal_eigenvalues(diagonal, squares));
+    const Eigen::VectorXd reference = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues();
+    EXPECT_LT(relative_difference(diagonal, reference), 1e-13);
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(n, n);  // tridiagonal with zeros on its off-diagonal
+    for (int i = 0; i < n; ++i) T(i, i) = gauss(rng);
+    for (int i = 0; i + 1 < n; i += 3) T(i + 1, i) = T(i, i + 1) = gauss(rng);
+    const Eigen::VectorXd expected = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues();
+    EXPECT_LT(relative_difference(eigenvalues_of(T), expected), 1e-14);
+  }
+}
+
+// The smallest eigenvalue of a Lanczos-sized tridiagonal matrix (Laguerre's iteration from below,
+// bisection on Sturm counts at the floating-point range's edge) against Eigen's: random, diagonal
+// (whose Gershgorin end is λ_min itself), split, equal diagonals, tiny, huge and zero.
+TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
+  std::mt19937 rng(19);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int k = 1; k <= 24; ++k) {
+    for (int kind = 0; kind < 7; ++kind) {
+      SCOPED_TRACE("k = " + std::to_string(k) + ", kind " + std::to_string(kind));
+      Eigen::VectorXd a(k), b(std::max(k - 1, 0));
+      for (int i = 0; i < k; ++i) a[i] = gauss(rng);
+      for (int i = 0; i + 1 < k; ++i) b[i] = gauss(rng);
+      if (kind == 1) b.setZero();
+      if (kind == 2) for (int i = 0; i + 1 < k; i += 2) b[i] = 0;
+      if (kind == 3) a.setConstant(0.3);
+      const double scale = kind == 4 ? 1e-200 : kind == 5 ? 1e200 : kind == 6 ? 0.0 : 1.0;
+      a *= scale;
+      b *= scale;
+      Eigen::MatrixXd T = Eigen::MatrixXd::Zero(k, k);
+      T.diagonal() = a;
+      for (int i = 0; i + 1 < k; ++i) T(i + 1, i) = T(i, i + 1) = b[i];
+      const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues()[0];
+      const double lowest = fact::sdp::detail::lowest_tridiagonal_eigenvalue(a, b);
+      EXPECT_LE(std::abs(lowest - exact), 1e-13 * T.cwiseAbs().maxCoeff()) << lowest << " against " << exact;
+    }
   }
 }
 

@@ -98,6 +98,80 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
   diagonal[n - 1] = std::real(A(n - 1, n - 1));
 }
 
+// The real reduction for n ≤ kPaddedMaxSize on a P × P copy of A whose size is fixed at compile
+// time (P ≥ n, a multiple of 4 from 8 on), both triangles filled from A's lower one: every column
+// operation is then a whole P-vector, which the compiler vectorises without remainder loops or
+// alias checks. The Householder vector v is zero outside the rows k + 1 … n − 1 it acts on, so
+// the full-length updates leave values in the rows above that are never read again (each such row
+// is only multiplied by the reflection) and that do not enter vᵀw, and the padding rows stay
+// zero. The same steps and reflector convention as tridiagonalize_impl, the same result to
+// rounding; n = 16 / 24 / 32 / 48: 1.23 / 3.46 / 5.36 / 12.9 µs → 0.79 / 1.60 / 2.63 / 5.65 µs
+// (BENCHMARKS.md, session 28).
+template <int P>
+void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal) {
+  using Column = Eigen::Matrix<double, P, 1>;
+  const int n = static_cast<int>(original.rows());
+  Eigen::Matrix<double, P, P> A;  // A in the leading n × n block (both triangles), zero elsewhere
+  A.setZero();
+  A.topLeftCorner(n, n) = original.selfadjointView<Eigen::Lower>();
+  Column v, w;  // Householder vector and τ A₂₂ v − (τ² vᵀA₂₂v / 2) v on rows k + 1 … n − 1
+  for (int k = 0; k + 2 < n; ++k) {
+    v = A.col(k);  // the column below the diagonal, x (rows ≥ n are zero)
+    const double x0 = v[k + 1];
+    for (int i = 0; i <= k + 1; ++i) v[i] = 0;
+    const double tail = v.squaredNorm();  // Σ x_i² below x₀
+    v[k + 1] = x0;
+    diagonal[k] = A(k, k);
+    if (tail == 0) {  // already tridiagonal in this column
+      subdiagonal[k] = std::abs(x0);
+      continue;
+    }
+    const double norm = std::sqrt(x0 * x0 + tail);
+    subdiagonal[k] = norm;
+    v[k + 1] += (x0 > 0 ? norm : -norm);
+    const double tau = 2.0 / (v[k + 1] * v[k + 1] + tail);
+    w.setZero();
+    for (int j = k + 1; j < n; ++j) w += A.col(j) * (tau * v[j]);  // τ A₂₂ v (+ unread rows above)
+    w -= (0.5 * tau * v.dot(w)) * v;
+    for (int j = k + 1; j < n; ++j) A.col(j) -= v * w[j] + w * v[j];  // A₂₂ −= v wᵀ + w vᵀ
+  }
+  if (n >= 2) {
+    diagonal[n - 2] = A(n - 2, n - 2);
+    subdiagonal[n - 2] = std::abs(A(n - 1, n - 2));
+  }
+  diagonal[n - 1] = A(n - 1, n - 1);
+}
+
+// Largest n reduced by tridiagonalize_padded (the exact step lengths' limit, kExactStepMaxSize).
+constexpr Eigen::Index kPaddedMaxSize = 64;
+
+// tridiagonalize_padded at the smallest padded size that holds A (n × n, 3 ≤ n ≤ kPaddedMaxSize).
+void tridiagonalize_small(const Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal) {
+  const Eigen::Index n = A.rows();
+  if (n <= 8) return tridiagonalize_padded<8>(A, diagonal, subdiagonal);
+  if (n <= 12) return tridiagonalize_padded<12>(A, diagonal, subdiagonal);
+  if (n <= 16) return tridiagonalize_padded<16>(A, diagonal, subdiagonal);
+  if (n <= 20) return tridiagonalize_padded<20>(A, diagonal, subdiagonal);
+  if (n <= 24) return tridiagonalize_padded<24>(A, diagonal, subdiagonal);
+  if (n <= 32) return tridiagonalize_padded<32>(A, diagonal, subdiagonal);
+  if (n <= 40) return tridiagonalize_padded<40>(A, diagonal, subdiagonal);
+  if (n <= 48) return tridiagonalize_padded<48>(A, diagonal, subdiagonal);
+  if (n <= 56) return tridiagonalize_padded<56>(A, diagonal, subdiagonal);
+  return tridiagonalize_padded<64>(A, diagonal, subdiagonal);
+}
+
+// The reduction without reflectors: padded for real A with 3 ≤ n ≤ kPaddedMaxSize, in place
+// otherwise.
+void tridiagonal_form(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
+                         Eigen::VectorXd& scratch) {
+  if (A.rows() >= 3 && A.rows() <= kPaddedMaxSize) return tridiagonalize_small(A, diagonal, subdiagonal);
+  tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
+}
+void tridiagonal_form(Eigen::MatrixXcd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
+                         Eigen::VectorXcd& scratch) {
+  tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
+}
+
 // Solves (T − σI) x = b in place (b becomes x) for the real symmetric tridiagonal T with diagonal
 // a (n) and off-diagonal e (n − 1), by Gaussian elimination with partial pivoting (row i and
 // i + 1 swapped when the subdiagonal entry is larger); a pivot of 0 (σ an eigenvalue to the last
@@ -165,7 +239,7 @@ Eigen::VectorXd eigenvalues_impl(const Matrix& original) {
   const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // one spare entry for tqlrat
   Eigen::Matrix<typename Matrix::Scalar, Eigen::Dynamic, 1> scratch(2 * n);
-  tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
+  tridiagonal_form(A, diagonal, subdiagonal, scratch);
   Eigen::VectorXd squares = subdiagonal.cwiseAbs2();  // n (the last entry is tqlrat's zero)
   if (tridiagonal_eigenvalues(diagonal, squares)) return unit * diagonal;
   // 30 QL sweeps without convergence on one eigenvalue (not seen in tests): Eigen's QR.
@@ -175,7 +249,7 @@ Eigen::VectorXd eigenvalues_impl(const Matrix& original) {
 }  // namespace
 
 void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal, Eigen::VectorXd& scratch) {
-  tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
+  tridiagonal_form(A, diagonal, subdiagonal, scratch);
 }
 
 bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2) {

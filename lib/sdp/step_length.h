@@ -3,8 +3,8 @@
 //
 // With P = L Lᵀ, P + αΔ ≻ 0  ⇔  I + α B ≻ 0  for  B = L⁻¹ Δ L⁻ᵀ (n × n, symmetric), so the
 // boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n, B is
-// reduced to a tridiagonal matrix (Householder) and λ_min is bracketed by Sturm counts; for
-// large n a Lanczos estimate is used. All work matrices live in a StepLength object that
+// reduced to a tridiagonal matrix (Householder) and λ_min is bounded from below by Laguerre's
+// iteration; for large n a Lanczos estimate is used. All work matrices live in a StepLength object that
 // the interior point allocates once.
 #pragma once
 
@@ -78,8 +78,8 @@ class StepLength {
   void take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor);
 
  private:
-  double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bracket λ_min
-  // True when the step for P (n × n) and τ is a Lanczos estimate rather than the exact bracket.
+  double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bound λ_min from below
+  // True when the step for P (n × n) and τ is a Lanczos estimate rather than the exact bound.
   static bool estimated(Eigen::Index n, double tau) {
     return n > kExactStepMaxSize || (tau >= 1.0 && n >= kPredictorLanczosMinSize);
   }
