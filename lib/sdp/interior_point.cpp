@@ -144,6 +144,19 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
   return cholesky_in_place(Z) ? shift : 2.0;
 }
 
+// Mehrotra's centring σ = (μ_aff/μ)^e from the predictor's complementarity μ_aff: e = 2 up to
+// kSquareCentringMaxSize rows, the usual e = 3 above. Sweep (6 seeds, N = 5 … 32, 384 instances,
+// two runs), e = 2 against 3: plain / low rank / random full rank / the paper's cost 0.85–0.97 of
+// the time at N = 5 … 16, 0.95–1.01 at N = 24, no status changes; e = 1, 1.5 and SDPT3's
+// max(1, 3·min(α_p, α_d)²) did about as well, e = 2.5 gained less, 4 and 6 lost. From N = 32
+// (10 seeds, N = 40 … 64) e = 2 measured 0.95–1.14 with outliers to 1.57×, and on the complex
+// interior point 0.94–1.05 with outliers to 1.64× (BENCHMARKS.md, session 28).
+constexpr int kSquareCentringMaxSize = 48;
+double centring(double mu_aff, double mu, int n) {
+  const double ratio = mu_aff / mu;
+  return std::clamp(n <= kSquareCentringMaxSize ? ratio * ratio : ratio * ratio * ratio, 0.0, 1.0);
+}
+
 }  // namespace
 
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
@@ -217,7 +230,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     const double ap_aff = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx_aff, 1.0);
     const double ad_aff = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
-    const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
+    const double sigma = centring(mu_aff, mu, n);
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
     // A(T) needs only T's diagonal blocks: A(σμW − X) − A((ΔX_a ΔZ_a) W).
     times_block_diagonal(ws.dx_aff, ws.dz_aff, d, ws.P);  // ΔX_a ΔZ_a
