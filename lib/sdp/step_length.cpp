@@ -220,13 +220,49 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 
 namespace {
 
-// Below this size a diagonal block of L is inverted by forward substitution; above it the
-// recursion's matrix products, which Eigen vectorises far better than its triangular solves
+// Below this size a diagonal block of L is inverted directly (real: invert_lower_padded; complex:
+// forward substitution by columns); above it the recursion's matrix products, which Eigen vectorises far better than its triangular solves
 // (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
 // Complex substitution loops are not vectorised, so complex blocks split further: 8 against 24,
 // N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best, BENCHMARKS.md, session 25).
 template <class Scalar>
 constexpr Eigen::Index kInverseBlock = std::is_same_v<Scalar, double> ? 24 : 8;
+
+// Real L⁻¹ for n ≤ P rows on P × P copies fixed at compile time. Row k of L⁻¹ is final once
+// divided by L_kk; its multiples are then taken off the rows below in every column at once, whole
+// P-vectors that do not wait on each other, where the substitution column by column (below) waits
+// on each x_k in turn: n = 10 / 16 / 24 0.29 / 0.80 / 1.94 µs → 0.17 / 0.26 / 0.56 µs
+// (BENCHMARKS.md, session 28).
+template <int P>
+void invert_lower_padded(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
+                         Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
+  const int n = static_cast<int>(L.rows());
+  Eigen::Matrix<double, P, P> below;     // L's strictly lower triangle, zero elsewhere
+  Eigen::Matrix<double, P, 1> reciprocal;  // 1 / L_kk
+  below.setZero();
+  reciprocal.setZero();
+  for (int j = 0; j < n; ++j) {
+    for (int i = j + 1; i < n; ++i) below(i, j) = L(i, j);
+    reciprocal[j] = 1.0 / L(j, j);
+  }
+  Eigen::Matrix<double, P, P> X = Eigen::Matrix<double, P, P>::Identity();  // becomes L⁻¹
+  for (int k = 0; k < n; ++k) {
+    for (int c = 0; c <= k; ++c) X(k, c) *= reciprocal[k];
+    for (int c = 0; c <= k; ++c) X.col(c) -= below.col(k) * X(k, c);
+  }
+  inverse = X.topLeftCorner(n, n);
+}
+
+// invert_lower_padded at the smallest padded size that holds L (n ≤ 24).
+void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
+                        Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
+  const Eigen::Index n = L.rows();
+  if (n <= 8) return invert_lower_padded<8>(L, inverse);
+  if (n <= 12) return invert_lower_padded<12>(L, inverse);
+  if (n <= 16) return invert_lower_padded<16>(L, inverse);
+  if (n <= 20) return invert_lower_padded<20>(L, inverse);
+  return invert_lower_padded<24>(L, inverse);
+}
 
 // L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
 // zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products that
@@ -236,7 +272,10 @@ template <class Scalar>
 void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> L,
                   Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> inverse) {
   const Eigen::Index n = L.rows();
-  if (n <= kInverseBlock<Scalar>) {
+  if constexpr (std::is_same_v<Scalar, double>) {
+    if (n <= kInverseBlock<Scalar>) return invert_lower_small(L, inverse);
+  }
+  if (n <= kInverseBlock<Scalar>) {  // complex: substitution by columns
     inverse.setZero();
     for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j, by columns of L
       Scalar* x = &inverse(0, j);
