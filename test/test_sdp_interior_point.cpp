@@ -290,9 +290,14 @@ void expect_triangular_kernels(int n, std::mt19937& rng) {
   const Matrix Z = B * B.adjoint() + n * Matrix::Identity(n, n);
   Matrix L = Z;
   ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
-  L = Matrix(L.template triangularView<Eigen::Lower>());
-  Matrix L_inv, W;
+  // NaN above L's diagonal and in L⁻¹'s storage beforehand: the inverse must read only L's lower
+  // triangle and write zeros above its own diagonal (the interior point's factors keep leftovers
+  // above theirs).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  L.template triangularView<Eigen::StrictlyUpper>().setConstant(nan);
+  Matrix L_inv = Matrix::Constant(n, n, nan), W;
   fact::sdp::detail::invert_lower_factor(L, L_inv);
+  L = Matrix(L.template triangularView<Eigen::Lower>());
   fact::sdp::detail::gram_of_lower_factor(L_inv, W);
   const Matrix I = Matrix::Identity(n, n);
   EXPECT_LT((L_inv * L - I).cwiseAbs().maxCoeff(), 1e-13);
@@ -361,14 +366,15 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
 }
 
 // The exact step lengths (n ≤ 48; the predictor's, τ = 1, below n = 24) against α_max = −1/λ_min of
-// L⁻¹ΔL⁻ᵀ from Eigen: never beyond τ·α_max, and short of it by at most the bound's tolerance (1e-2
-// for the predictor, 1e-3 for the corrector); for a full Δ, a block-diagonal one, and Δ = −c·P,
-// whose B = −c·I has one eigenvalue n times.
+// the pencil (Δ, P) from Eigen's generalised eigensolver (independent of the factors the step
+// lengths take): never beyond τ·α_max, and short of it by at most the bound's tolerance (1e-2 for
+// the predictor, 1e-3 for the corrector: α ≥ (1 − tolerance)·τ·α_max); for a full Δ, a
+// block-diagonal one, and Δ = −c·P, whose B = −c·I has one eigenvalue n times.
 TEST(SdpKernels, ExactStepLengthsStopWithinTheirToleranceOfTheBoundary) {
   using fact::sdp::detail::StepLength;
   std::mt19937 rng(31);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n : {4, 10, 16, 24, 34, 48}) {
+  for (int n : {2, 4, 10, 16, 24, 34, 48}) {
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd P = B * B.transpose() / n + 0.1 * Eigen::MatrixXd::Identity(n, n);  // n × n, ≻ 0
     const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
@@ -377,16 +383,19 @@ TEST(SdpKernels, ExactStepLengthsStopWithinTheirToleranceOfTheBoundary) {
     fact::sdp::detail::invert_lower_factor(L, L_inv);
     Eigen::MatrixXd blocks = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, 2, rng, gauss);  // n × 2
     for (int i = 0; i < n; i += 2) blocks(i + 1, 0) = blocks(i, 1);  // symmetric 2 × 2 blocks, stacked
+    // Δ₀₀ = −2 P₀₀ − 1 puts a Rayleigh quotient of (Δ, P) below −2: the boundary is inside the full step.
+    blocks(0, 0) = -2.0 * P(0, 0) - 1.0;
     for (int kind = 0; kind < 3; ++kind) {
       SCOPED_TRACE("n = " + std::to_string(n) + ", Δ kind " + std::to_string(kind));
       Eigen::MatrixXd delta = kind == 0 ? Eigen::MatrixXd(G + G.transpose()) : Eigen::MatrixXd(-3.0 * P);  // n × n
+      if (kind == 0) delta(0, 0) = -2.0 * P(0, 0) - 1.0;
       if (kind == 1) {
         delta.setZero();
         for (int i = 0; i < n; i += 2) delta.block(i, i, 2, 2) = blocks.middleRows(i, 2);
       }
-      const Eigen::MatrixXd Bmat = L_inv * delta * L_inv.transpose();
-      const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Bmat, Eigen::EigenvaluesOnly).eigenvalues()[0];
-      ASSERT_LT(lowest, -1.0);  // the boundary is inside the full step
+      const double lowest =
+          Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd>(delta, P, Eigen::EigenvaluesOnly).eigenvalues()[0];
+      ASSERT_LT(lowest, -1.0);
       const double alpha_max = -1.0 / lowest;
       StepLength steps(n);
       for (double tau : {1.0, 0.95}) {
@@ -394,7 +403,7 @@ TEST(SdpKernels, ExactStepLengthsStopWithinTheirToleranceOfTheBoundary) {
         const double alpha = kind == 1 ? steps.block_diagonal(P, L, L_inv, blocks, 2, tau) : steps.full(P, L, L_inv, delta, tau);
         const double tolerance = tau == 1.0 ? 1e-2 : 1e-3;
         EXPECT_LE(alpha, tau * alpha_max * (1 + 1e-12)) << "τ = " << tau;
-        EXPECT_GE(alpha, tau * alpha_max / (1 + tolerance) * (1 - 1e-12)) << "τ = " << tau;
+        EXPECT_GE(alpha, (1 - tolerance) * tau * alpha_max * (1 - 1e-12)) << "τ = " << tau;
       }
     }
   }

@@ -92,6 +92,25 @@ TEST(SdpSpectrum, ReductionReadsTheLowerTriangleAndKeepsReducedColumns) {
     for (int i = 0; i + 1 < n; i += 3) T(i + 1, i) = T(i, i + 1) = gauss(rng);
     const Eigen::VectorXd expected = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues();
     EXPECT_LT(relative_difference(eigenvalues_of(T), expected), 1e-14);
+    // Dense 3 × 3 diagonal blocks: columns that need a reflection next to ones that do not.
+    Eigen::MatrixXd blocks = Eigen::MatrixXd::Zero(n, n);
+    for (int i = 0; i < n; i += 3) {
+      const int size = std::min(3, n - i);
+      const Eigen::MatrixXd G = real_test_matrix(size, 0, 0.0, rng, gauss);
+      blocks.block(i, i, size, size) = G;
+    }
+    const Eigen::VectorXd block_values =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(blocks, Eigen::EigenvaluesOnly).eigenvalues();
+    EXPECT_LT(relative_difference(eigenvalues_of(blocks), block_values), 1e-13);
+    // One column below the diagonal of entries near 1e-160 in an O(1) matrix: its reflector is
+    // formed on the unit scale (τ overflowed to ∞ from the unscaled one).
+    Eigen::MatrixXd tiny = real_test_matrix(n, 2, 1.0, rng, gauss);
+    tiny.col(0).tail(n - 1).setConstant(1e-160);
+    tiny.row(0).tail(n - 1).setConstant(1e-160);
+    const Eigen::VectorXd tiny_values = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(tiny, Eigen::EigenvaluesOnly).eigenvalues();
+    const Eigen::VectorXd ours = eigenvalues_of(tiny);
+    ASSERT_TRUE(ours.allFinite());
+    EXPECT_LT(relative_difference(ours, tiny_values), 1e-13);
   }
 }
 
@@ -102,7 +121,7 @@ TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
   std::mt19937 rng(19);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (int k = 1; k <= 24; ++k) {
-    for (int kind = 0; kind < 7; ++kind) {
+    for (int kind = 0; kind < 9; ++kind) {
       SCOPED_TRACE("k = " + std::to_string(k) + ", kind " + std::to_string(kind));
       Eigen::VectorXd a(k), b(std::max(k - 1, 0));
       for (int i = 0; i < k; ++i) a[i] = gauss(rng);
@@ -110,6 +129,14 @@ TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
       if (kind == 1) b.setZero();
       if (kind == 2) for (int i = 0; i + 1 < k; i += 2) b[i] = 0;
       if (kind == 3) a.setConstant(0.3);
+      if (kind == 7) {  // λ_min = −1 repeated k/2 times (Laguerre alone converges only linearly there)
+        b.setZero();
+        for (int i = 0; i < k; ++i) a[i] = i % 2 ? 2.0 + i : -1.0;
+      }
+      if (kind == 8) {  // identical 2 × 2 blocks: λ_min repeated ⌊k/2⌋ times
+        for (int i = 0; i < k; ++i) a[i] = i % 2 ? 2.0 : 1.0;
+        for (int i = 0; i + 1 < k; ++i) b[i] = i % 2 ? 0.0 : 0.7;
+      }
       const double scale = kind == 4 ? 1e-200 : kind == 5 ? 1e200 : kind == 6 ? 0.0 : 1.0;
       a *= scale;
       b *= scale;

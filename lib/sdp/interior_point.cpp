@@ -145,16 +145,18 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
 }
 
 // Mehrotra's centring σ = (μ_aff/μ)^e from the predictor's complementarity μ_aff: e = 2 up to
-// kSquareCentringMaxSize rows, the usual e = 3 above. Sweep (6 seeds, N = 5 … 32, 384 instances,
-// two runs), e = 2 against 3: plain / low rank / random full rank / the paper's cost 0.85–0.97 of
-// the time at N = 5 … 16, 0.95–1.01 at N = 24, no status changes; e = 1, 1.5 and SDPT3's
-// max(1, 3·min(α_p, α_d)²) did about as well, e = 2.5 gained less, 4 and 6 lost. From N = 32
-// (10 seeds, N = 40 … 64) e = 2 measured 0.95–1.14 with outliers to 1.57×, and on the complex
-// interior point 0.94–1.05 with outliers to 1.64× (BENCHMARKS.md, session 28).
+// kSquareCentringMaxSize rows (N = 24), the usual e = 3 above. Sweep (6 seeds, N = 5 … 32, two runs),
+// e = 2 against 3: plain / low rank / random full rank / the paper's cost 0.85–0.97 of the time at
+// N = 5 … 16 and 0.95–1.01 at N = 24, no status changes (8 seeds, when taken: 0.90–0.97 at
+// N = 5 … 8); e = 1, 1.5 and SDPT3's max(1, 3·min(α_p, α_d)²) did about as well, e = 2.5 gained
+// less, 4 and 6 lost. Above 48 rows (N = 40, 56, 64; 10 seeds) e = 2 measured 0.95–1.14 with
+// single instances to 1.57×, and on the complex interior point 0.94–1.05 with outliers to 1.64×
+// (BENCHMARKS.md, session 28). A negative ratio (unequal primal and dual steps) gives σ = 0, as the
+// cube's clamp did.
 constexpr int kSquareCentringMaxSize = 48;
 double centring(double mu_aff, double mu, int n) {
-  const double ratio = mu_aff / mu;
-  return std::clamp(n <= kSquareCentringMaxSize ? ratio * ratio : ratio * ratio * ratio, 0.0, 1.0);
+  const double ratio = std::max(0.0, mu_aff / mu);
+  return std::min(1.0, n <= kSquareCentringMaxSize ? ratio * ratio : ratio * ratio * ratio);
 }
 
 }  // namespace

@@ -206,12 +206,12 @@ Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A);
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A);
 
 // The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a (k) and
-// subdiagonal b (k − 1), to within a few kε·‖T‖ (20 000 random, diagonal, zero and badly scaled
-// T up to k = 24: at most 52ε·‖T‖ from Eigen's), by the Laguerre iteration the exact step lengths
-// use (step_length.cpp): a few hundred flops for the Lanczos matrices here (k ≤ 24), where Eigen's
-// QR iteration with its allocations cost 6 % of a tight_noisy N = 32 solve. Bisection on Sturm
-// counts to 4ε·‖T‖, until session 28, took 0.76 / 1.48 / 5.1 µs at k = 8 / 12 / 24, this 0.26 /
-// 0.52 / 0.99 µs.
+// subdiagonal b (k − 1), to within a few kε·‖T‖ (20 000 random, diagonal, zero, badly scaled and
+// repeated-λ_min T up to k = 24: at most 52ε·‖T‖ from Eigen's), by the Laguerre iteration the
+// exact step lengths use (step_length.cpp), T scaled into range first: a few hundred flops for the
+// Lanczos matrices here (k ≤ 24), where Eigen's QR iteration with its allocations cost 6 % of a
+// tight_noisy N = 32 solve. Bisection on Sturm counts to 4ε·‖T‖, until session 28, took 0.76 /
+// 1.48 / 5.1 µs at k = 8 / 12 / 24, this 0.28 / 0.38 / 0.99 µs.
 double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b);
 
 // The lowest Ritz value of a self-adjoint operator (n × n, real or complex: Vector is VectorXd or

@@ -19,6 +19,11 @@ namespace {
 double conj_of(double x) { return x; }
 std::complex<double> conj_of(const std::complex<double>& x) { return std::conj(x); }
 
+// A column below the diagonal whose norm is at most this is reflected with its Householder vector
+// on the unit scale: v = x + phase‖x‖e₁ itself would make τ = 2/‖v‖² overflow once ‖x‖² underflows
+// (entries near 1e-160 in an O(1) matrix gave τ = ∞ and NaN eigenvalues; review, session 28).
+constexpr double kTinyColumn = 1e-100;
+
 // The reflectors of a reduction, for eigenvectors: step k's H_k = I − τ_k v vᴴ acts on entries
 // k + 1 … n − 1 with v stored in column k of the reduced A below the diagonal, and the reduced
 // matrix's subdiagonal entry (k + 1, k) is beta_k (complex for complex A; the tridiagonal matrix
@@ -60,8 +65,17 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
     const Scalar phase = size0 > 0 ? x[0] / size0 : Scalar(-1);
     subdiagonal[k] = norm;
     std::copy(x, x + m, v);
-    v[0] += phase * norm;
-    const double tau = 2.0 / (std::norm(v[0]) + tail);
+    double tau;
+    if (norm > kTinyColumn) {
+      v[0] += phase * norm;
+      tau = 2.0 / (std::norm(v[0]) + tail);
+    } else {  // v on the unit scale, x/‖x‖ + phase·e₁ (H depends only on v's direction)
+      double length2 = 0;  // ‖v‖²
+      for (Eigen::Index i = 0; i < m; ++i) v[i] *= 1.0 / norm;
+      v[0] += phase;
+      for (Eigen::Index i = 0; i < m; ++i) length2 += std::norm(v[i]);
+      tau = 2.0 / length2;
+    }
     if (kept) {
       kept->tau[k] = tau;
       kept->beta[k] = -phase * norm;  // H x = −phase(x₀)‖x‖e₁
@@ -105,7 +119,7 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
 // the full-length updates leave values in the rows above that are never read again (each such row
 // is only multiplied by the reflection) and that do not enter vᵀw, and the padding rows stay
 // zero. The same steps and reflector convention as tridiagonalize_impl, the same result to
-// rounding; n = 16 / 24 / 32 / 48: 1.23 / 3.46 / 5.36 / 12.9 µs → 0.79 / 1.60 / 2.63 / 5.65 µs
+// rounding; n = 16 / 24 / 32 / 48: 1.23 / 3.46 / 5.36 / 12.9 µs → 0.83 / 1.66 / 2.73 / 5.99 µs
 // (BENCHMARKS.md, session 28).
 template <int P>
 void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal) {
@@ -128,8 +142,15 @@ void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& dia
     }
     const double norm = std::sqrt(x0 * x0 + tail);
     subdiagonal[k] = norm;
-    v[k + 1] += (x0 > 0 ? norm : -norm);
-    const double tau = 2.0 / (v[k + 1] * v[k + 1] + tail);
+    double tau;
+    if (norm > kTinyColumn) {
+      v[k + 1] += (x0 > 0 ? norm : -norm);
+      tau = 2.0 / (v[k + 1] * v[k + 1] + tail);
+    } else {  // on the unit scale, as in tridiagonalize_impl
+      v *= 1.0 / norm;
+      v[k + 1] += (x0 > 0 ? 1.0 : -1.0);
+      tau = 2.0 / v.squaredNorm();
+    }
     w.setZero();
     for (int j = k + 1; j < n; ++j) w += A.col(j) * (tau * v[j]);  // τ A₂₂ v (+ unread rows above)
     w -= (0.5 * tau * v.dot(w)) * v;
@@ -142,7 +163,8 @@ void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& dia
   diagonal[n - 1] = A(n - 1, n - 1);
 }
 
-// Largest n reduced by tridiagonalize_padded (the exact step lengths' limit, kExactStepMaxSize).
+// Largest n reduced by tridiagonalize_padded: the exact step lengths' matrices (n ≤ 48) and the
+// certificates' up to 64 rows (random low rank N = 25 … 32: 0.93–0.94 of the time; session 28).
 constexpr Eigen::Index kPaddedMaxSize = 64;
 
 // tridiagonalize_padded at the smallest padded size that holds A (n × n, 3 ≤ n ≤ kPaddedMaxSize).
@@ -235,7 +257,9 @@ double copy_in_range(const Matrix& original, Matrix& A) {
 template <class Matrix>
 Eigen::VectorXd eigenvalues_impl(const Matrix& original) {
   const Eigen::Index n = original.rows();
-  Matrix A;  // n × n, A's copy in range, destroyed by the reduction
+  // (the QL iteration turns a NaN into finite values: a certificate must not look valid)
+  if (!original.allFinite()) return Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN());
+  Matrix A;  // n × n, A's copy in range (the in-place reduction, n > 64 or complex, destroys it)
   const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // one spare entry for tqlrat
   Eigen::Matrix<typename Matrix::Scalar, Eigen::Dynamic, 1> scratch(2 * n);

@@ -1,7 +1,8 @@
 // Step lengths of the interior point (see step_length.h). The kernels below (and spectrum.cpp's
-// tridiagonalisation) work on raw column-major storage: at the sizes the exact path serves
-// (n ≤ 48) Eigen's blocked triangular solves and tridiagonalisation spend most of their time on
-// overhead.
+// tridiagonalisation) work on raw column-major storage or on zero-padded copies whose size is
+// fixed at compile time: at the sizes the exact path serves (n ≤ 48) Eigen's blocked triangular
+// solves and tridiagonalisation spend most of their time on overhead, and loops over a column's
+// varying tail on their remainders.
 #include "step_length.h"
 
 #include "internal.h"
@@ -53,34 +54,57 @@ bool inverse_power_sums(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen:
   return true;
 }
 
-// Iterations of lowest_from_below before it returns its bound as it stands (cubic convergence
-// takes 3–5 on the step lengths' matrices, BENCHMARKS.md, session 28).
+// Iterations of lowest_from_below before it returns its bound as it stands (3–5 on the step
+// lengths' matrices, where λ_min is simple and Laguerre's iteration converges cubically).
 constexpr int kMaxLaguerreSteps = 50;
+// Laguerre's iteration converges only linearly on a repeated or tightly clustered λ_min (a fixed
+// fraction of the error left a step: 0.65–0.75 at multiplicity n/2, review, session 28). From the
+// third step on, a step longer than this fraction of the one before makes lowest_from_below bisect
+// its bracket instead: on random tridiagonal matrices (k = 4 … 48, 3000 each) that happens in
+// under 1.5 % of calls, and a 24 × 24 matrix whose λ_min is 12-fold takes 2 steps and 44 Sturm
+// counts, where the iteration alone stopped 1.4e-10 short after 50 steps.
+constexpr double kSlowStepRatio = 0.5;
+
+// The lower end of [lo, hi] narrowed by bisection on Sturm counts until hi − lo ≤ max(absolute,
+// relative·|lo|); lo must lie below λ_min of the tridiagonal (a, b) and hi at or above it.
+double bisect_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
+                         double lo, double hi, double relative, double absolute) {
+  while (hi - lo > std::max(absolute, relative * std::abs(lo))) {
+    const double mid = 0.5 * (lo + hi);
+    if (!(mid > lo && mid < hi)) break;  // the bracket is down to adjacent doubles
+    (eigenvalues_below(a, b, mid) > 0 ? hi : lo) = mid;
+  }
+  return lo;
+}
 
 // A lower bound lo on λ_min of the tridiagonal (a, b) with λ_min − lo ≤ max(absolute, relative·|lo|),
 // by Laguerre's iteration from x, which must lie below λ_min (NaN otherwise). For a matrix, whose
 // characteristic polynomial has only real roots, Laguerre's iterates from below rise monotonically
-// to λ_min and converge cubically. At each iterate s1 = Σ 1/(λ_j − x) bounds λ_min − x between 1/s1
-// and n/s1, so x + 1/s1 is the bound and (n − 1)/s1 its error. An iterate that rounding carries
-// past λ_min (a pivot ≤ 0) ends the iteration in bisection on Sturm counts between the last two.
-// Against the geometric bisection it replaces: n = 14 / 32 / 48 0.42 / 1.56 / 2.89 µs → 0.31 /
-// 0.87 / 1.34 µs a step length, and the bound is tighter.
+// to λ_min, cubically when it is simple. At each iterate s1 = Σ 1/(λ_j − x) brackets λ_min between
+// x + 1/s1 and x + n/s1: the lower end is the bound, the width (n − 1)/s1 its error. When the
+// steps shrink slowly (a repeated or clustered λ_min) the bracket is bisected on Sturm counts; an
+// iterate that rounding carries to or past λ_min (a pivot ≤ 0) is an upper end, and one count just
+// below it usually finishes. Against the geometric bisection it replaces: n = 14 / 32 / 48 0.42 / 1.56 /
+// 2.89 µs → 0.31 / 0.87 / 1.34 µs a step length, and the bound is tighter.
 double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
                          double x, double relative, double absolute) {
   const double n = static_cast<double>(a.size());
+  const auto tolerance = [&](double at) { return std::max(absolute, relative * std::abs(at)); };
   double s1, s2;
   if (!inverse_power_sums(a, b, x, s1, s2)) return std::numeric_limits<double>::quiet_NaN();
+  double previous_step = std::numeric_limits<double>::infinity();
   for (int step = 0; step < kMaxLaguerreSteps; ++step) {
-    const double lo = x + 1.0 / s1;
-    if ((n - 1.0) / s1 <= std::max(absolute, relative * std::abs(lo))) return lo;
-    double next = x + n / (s1 + std::sqrt(std::max(0.0, (n - 1.0) * (n * s2 - s1 * s1))));
-    if (!inverse_power_sums(a, b, next, s1, s2)) {  // past λ_min: bisect [x, next]
-      while (next - x > std::max(absolute, relative * std::abs(x))) {
-        const double mid = 0.5 * (x + next);
-        if (!(mid > x && mid < next)) break;
-        (eigenvalues_below(a, b, mid) > 0 ? next : x) = mid;
-      }
-      return x;
+    const double lo = x + 1.0 / s1, hi = x + n / s1;  // λ_min ∈ [lo, hi]
+    if (hi - lo <= tolerance(lo)) return lo;
+    const double next = x + n / (s1 + std::sqrt(std::max(0.0, (n - 1.0) * (n * s2 - s1 * s1))));
+    if (!(next > x)) return lo;  // no progress left in floating point
+    if (step >= 2 && next - x > kSlowStepRatio * previous_step) return bisect_from_below(a, b, lo, hi, relative, absolute);
+    previous_step = next - x;
+    if (!inverse_power_sums(a, b, next, s1, s2)) {  // λ_min ≤ next
+      const double below = next - 0.5 * tolerance(next);
+      if (below <= lo) return lo;  // lo is within the tolerance of next
+      if (eigenvalues_below(a, b, below) == 0) return below;
+      return bisect_from_below(a, b, lo, below, relative, absolute);
     }
     x = next;
   }
@@ -144,13 +168,14 @@ void times_block_diagonal_fixed(const Eigen::MatrixXd& P, const Eigen::MatrixXd&
 }  // namespace
 
 double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
-  const double radius = gershgorin_radius(a, b);
-  if (!std::isfinite(radius) || !a.allFinite() || !b.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  if (radius == 0) return 0.0;  // T = 0
-  if (radius < 1e-100 || radius > 1e100) {  // the pivots' recurrence squares b and divides by q: T / radius
-    const Eigen::VectorXd an = a / radius, bn = b / radius;
-    return radius * lowest_tridiagonal_eigenvalue(an, bn);
+  if (!a.allFinite() || !b.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  const double largest = std::max(a.cwiseAbs().maxCoeff(), b.size() > 0 ? b.cwiseAbs().maxCoeff() : 0.0);
+  if (largest == 0) return 0.0;  // T = 0
+  if (largest < 1e-100 || largest > 1e100) {  // the pivots' recurrence squares b and divides by q
+    const Eigen::VectorXd an = a / largest, bn = b / largest;
+    return largest * lowest_tridiagonal_eigenvalue(an, bn);
   }
+  const double radius = gershgorin_radius(a, b);
   const Eigen::Index k = a.size();
   double lo = a[0], hi = a[0];  // λ_min ∈ [lo, hi]: the ends of the Gershgorin discs
   for (Eigen::Index i = 0; i < k; ++i) {
@@ -224,14 +249,16 @@ namespace {
 // forward substitution by columns); above it the recursion's matrix products, which Eigen vectorises far better than its triangular solves
 // (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
 // Complex substitution loops are not vectorised, so complex blocks split further: 8 against 24,
-// N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best, BENCHMARKS.md, session 25).
+// N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best with substitution,
+// BENCHMARKS.md, session 25; the padded kernel measured faster than the recursion up to 32 rows
+// too, but not at 48, session 28).
 template <class Scalar>
 constexpr Eigen::Index kInverseBlock = std::is_same_v<Scalar, double> ? 24 : 8;
 
 // Real L⁻¹ for n ≤ P rows on P × P copies fixed at compile time. Row k of L⁻¹ is final once
 // divided by L_kk; its multiples are then taken off the rows below in every column at once, whole
 // P-vectors that do not wait on each other, where the substitution column by column (below) waits
-// on each x_k in turn: n = 10 / 16 / 24 0.29 / 0.80 / 1.94 µs → 0.17 / 0.26 / 0.56 µs
+// on each x_k in turn: n = 10 / 16 / 24 0.29 / 0.80 / 1.94 µs → 0.19 / 0.27 / 0.64 µs
 // (BENCHMARKS.md, session 28).
 template <int P>
 void invert_lower_padded(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
@@ -253,8 +280,9 @@ void invert_lower_padded(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::Outer
   inverse = X.topLeftCorner(n, n);
 }
 
-// invert_lower_padded at the smallest padded size that holds L (n ≤ 24).
-void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
+// invert_lower_padded at the smallest padded size that holds L (n ≤ 24). Not inlined: the padded
+// copies (up to 9 KB) then stay out of invert_lower's recursive frames.
+EIGEN_DONT_INLINE void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
                         Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
   const Eigen::Index n = L.rows();
   if (n <= 8) return invert_lower_padded<8>(L, inverse);
@@ -396,8 +424,9 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
   if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
   const double start = -1.01 * gershgorin_radius(diagonal_, subdiagonal_);  // below λ_min
   double lo = lowest_from_below(diagonal_, subdiagonal_, start, tau >= 1.0 ? 1e-2 : 1e-3, 0.0);
-  if (!(lo < -tau)) lo = start;  // (not expected: λ_min < −τ here; the Gershgorin bound always holds)
-  return tau / -lo;
+  if (std::isnan(lo)) lo = start;  // (not expected: the Gershgorin bound is below λ_min)
+  // (lo ≥ −τ only by rounding, the Sturm count above and Laguerre's pivots disagreeing near −τ)
+  return std::min(1.0, tau / -lo);
 }
 
 bool StepLength::positive_definite() {

@@ -40,8 +40,8 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
 // triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
-// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex), forward
-// substitution below.
+// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex); below, real
+// blocks on padded fixed-size copies (every column at once), complex ones by forward substitution.
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
@@ -96,7 +96,7 @@ class StepLength {
   bool positive_definite();  // Cholesky test of trial_
 
   Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
-  Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n; overwritten by the tridiagonalisation
+  Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n (the in-place tridiagonalisation, n > 64, overwrites it)
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
   Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
                                   // blocked kernel above kExactStepMaxSize), n × n
