@@ -185,12 +185,12 @@ void tridiagonalize_small(const Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, E
 // The reduction without reflectors: padded for real A with 3 ≤ n ≤ kPaddedMaxSize, in place
 // otherwise.
 void tridiagonal_form(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
-                         Eigen::VectorXd& scratch) {
+                      Eigen::VectorXd& scratch) {
   if (A.rows() >= 3 && A.rows() <= kPaddedMaxSize) return tridiagonalize_small(A, diagonal, subdiagonal);
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
 }
 void tridiagonal_form(Eigen::MatrixXcd& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal,
-                         Eigen::VectorXcd& scratch) {
+                      Eigen::VectorXcd& scratch) {
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
 }
 

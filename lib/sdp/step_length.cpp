@@ -54,16 +54,15 @@ bool inverse_power_sums(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen:
   return true;
 }
 
-// Iterations of lowest_from_below before it returns its bound as it stands (3–5 on the step
-// lengths' matrices, where λ_min is simple and Laguerre's iteration converges cubically).
-constexpr int kMaxLaguerreSteps = 50;
-// Laguerre's iteration converges only linearly on a repeated or tightly clustered λ_min (a fixed
-// fraction of the error left a step: 0.65–0.75 at multiplicity n/2, review, session 28). From the
-// third step on, a step longer than this fraction of the one before makes lowest_from_below bisect
-// its bracket instead: on random tridiagonal matrices (k = 4 … 48, 3000 each) that happens in
-// under 1.5 % of calls, and a 24 × 24 matrix whose λ_min is 12-fold takes 2 steps and 44 Sturm
-// counts, where the iteration alone stopped 1.4e-10 short after 50 steps.
-constexpr double kSlowStepRatio = 0.5;
+// Laguerre steps lowest_from_below takes before it bisects its bracket instead. On a simple λ_min
+// it converges in 3–6 (after a phase that halves the distance when it starts far below a small
+// λ_min); on a repeated or tightly clustered one only linearly (a fixed fraction of the error left
+// a step: 0.65–0.75 at multiplicity n/2, review, session 28). Random tridiagonal matrices (k = 4 …
+// 48, 3000 each, indefinite and positive definite with a small λ_min): no call reaches 12; a
+// 24 × 24 matrix whose λ_min is 12-fold takes 12 steps and 37 Sturm counts to rounding, where the
+// iteration alone stopped 1.4e-10 short after 50. Stopping at the third step that did not halve
+// the last one instead sent positive definite matrices with a small λ_min to a 50-count bisection.
+constexpr int kLaguerreSteps = 12;
 
 // The lower end of [lo, hi] narrowed by bisection on Sturm counts until hi − lo ≤ max(absolute,
 // relative·|lo|); lo must lie below λ_min of the tridiagonal (a, b) and hi at or above it.
@@ -81,25 +80,22 @@ double bisect_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
 // by Laguerre's iteration from x, which must lie below λ_min (NaN otherwise). For a matrix, whose
 // characteristic polynomial has only real roots, Laguerre's iterates from below rise monotonically
 // to λ_min, cubically when it is simple. At each iterate s1 = Σ 1/(λ_j − x) brackets λ_min between
-// x + 1/s1 and x + n/s1: the lower end is the bound, the width (n − 1)/s1 its error. When the
-// steps shrink slowly (a repeated or clustered λ_min) the bracket is bisected on Sturm counts; an
+// x + 1/s1 and x + n/s1: the lower end is the bound, the width (n − 1)/s1 its error. After
+// kLaguerreSteps (a repeated or clustered λ_min) the bracket is bisected on Sturm counts; an
 // iterate that rounding carries to or past λ_min (a pivot ≤ 0) is an upper end, and one count just
-// below it usually finishes. Against the geometric bisection it replaces: n = 14 / 32 / 48 0.42 / 1.56 /
-// 2.89 µs → 0.31 / 0.87 / 1.34 µs a step length, and the bound is tighter.
+// below it usually finishes. Against the geometric bisection it replaces: n = 14 / 32 / 48
+// 0.42 / 1.56 / 2.89 µs → 0.31 / 0.87 / 1.34 µs a step length, and the bound is tighter.
 double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
                          double x, double relative, double absolute) {
   const double n = static_cast<double>(a.size());
   const auto tolerance = [&](double at) { return std::max(absolute, relative * std::abs(at)); };
   double s1, s2;
   if (!inverse_power_sums(a, b, x, s1, s2)) return std::numeric_limits<double>::quiet_NaN();
-  double previous_step = std::numeric_limits<double>::infinity();
-  for (int step = 0; step < kMaxLaguerreSteps; ++step) {
+  for (int step = 0; step < kLaguerreSteps; ++step) {
     const double lo = x + 1.0 / s1, hi = x + n / s1;  // λ_min ∈ [lo, hi]
     if (hi - lo <= tolerance(lo)) return lo;
     const double next = x + n / (s1 + std::sqrt(std::max(0.0, (n - 1.0) * (n * s2 - s1 * s1))));
     if (!(next > x)) return lo;  // no progress left in floating point
-    if (step >= 2 && next - x > kSlowStepRatio * previous_step) return bisect_from_below(a, b, lo, hi, relative, absolute);
-    previous_step = next - x;
     if (!inverse_power_sums(a, b, next, s1, s2)) {  // λ_min ≤ next
       const double below = next - 0.5 * tolerance(next);
       if (below <= lo) return lo;  // lo is within the tolerance of next
@@ -108,7 +104,7 @@ double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
     }
     x = next;
   }
-  return x + 1.0 / s1;
+  return bisect_from_below(a, b, x + 1.0 / s1, x + n / s1, relative, absolute);  // converging linearly
 }
 
 // Gershgorin bound on the spectral radius of the tridiagonal (a, b).
@@ -246,8 +242,9 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 namespace {
 
 // Below this size a diagonal block of L is inverted directly (real: invert_lower_padded; complex:
-// forward substitution by columns); above it the recursion's matrix products, which Eigen vectorises far better than its triangular solves
-// (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
+// forward substitution by columns); above it the recursion's matrix products, which Eigen
+// vectorises far better than its triangular solves (complex, N = 100, AVX-512: 0.06 ms against
+// 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
 // Complex substitution loops are not vectorised, so complex blocks split further: 8 against 24,
 // N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best with substitution,
 // BENCHMARKS.md, session 25; the padded kernel measured faster than the recursion up to 32 rows
@@ -283,7 +280,7 @@ void invert_lower_padded(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::Outer
 // invert_lower_padded at the smallest padded size that holds L (n ≤ 24). Not inlined: the padded
 // copies (up to 9 KB) then stay out of invert_lower's recursive frames.
 EIGEN_DONT_INLINE void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
-                        Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
+                                          Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
   const Eigen::Index n = L.rows();
   if (n <= 8) return invert_lower_padded<8>(L, inverse);
   if (n <= 12) return invert_lower_padded<12>(L, inverse);
