@@ -5,6 +5,7 @@
 // (inverse iteration on the tridiagonal matrix) by their residuals and orthonormality.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "internal.h"
@@ -148,6 +149,15 @@ TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
       EXPECT_LE(std::abs(lowest - exact), 1e-13 * T.cwiseAbs().maxCoeff()) << lowest << " against " << exact;
     }
   }
+  // Entries near the largest double, whose Gershgorin sum overflows (scaled by the largest entry).
+  Eigen::VectorXd a(3), b(2);
+  a << 1e308, -1e308, 5e307;
+  b << 1e308, 1e308;
+  Eigen::Matrix3d T = a.asDiagonal();
+  T(1, 0) = T(0, 1) = b[0];
+  T(2, 1) = T(1, 2) = b[1];
+  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(T / 1e308, Eigen::EigenvaluesOnly).eigenvalues()[0];
+  EXPECT_NEAR(fact::sdp::detail::lowest_tridiagonal_eigenvalue(a, b) / 1e308, exact, 1e-13);
 }
 
 TEST(SdpSpectrum, TridiagonalThatSplitsAndHasZeros) {
@@ -220,6 +230,56 @@ TEST(SdpSpectrum, LowestEigenvectorsOfMatricesThatAreAlreadyReduced) {
   Eigen::MatrixXcd Z(2, 2);  // n = 2: no reflector at all, a complex off-diagonal entry
   Z << 1.0, std::complex<double>(0.3, -0.4), std::complex<double>(0.3, 0.4), -2.0;
   expect_lowest_eigenpairs(Z, 2);
+}
+
+// An eigenvalue split off from the rest by a coupling of 1e-120 (its row and column otherwise 0):
+// the inverse iteration's pivot there is that small after a row swap, and the iterate used to grow
+// until its norm overflowed and it normalised to a zero vector (review, session 28). Every vector,
+// real (k = n) and complex (k = 2), with small residuals and orthonormal.
+TEST(SdpSpectrum, LowestEigenvectorsOfANearlySplitMatrix) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n = 3; n <= 8; ++n) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    Eigen::MatrixXd A = real_test_matrix(n, 0, 0.0, rng, gauss);
+    for (int i = 1; i < n; ++i) A(i, 0) = A(0, i) = 1e-120 * gauss(rng);
+    expect_lowest_eigenpairs(A, n);
+    Eigen::MatrixXcd H = hermitian_test_matrix(n, rng, gauss);
+    for (int i = 1; i < n; ++i) {
+      H(i, 0) = std::complex<double>(1e-120 * gauss(rng), 1e-120 * gauss(rng));
+      H(0, i) = std::conj(H(i, 0));
+    }
+    H(0, 0) = -5.0;  // the split eigenvalue is the lowest
+    expect_lowest_eigenpairs(H, 2);
+  }
+}
+
+// Non-finite input gives NaN spectra and a NaN dual bound, never finite values that could pass for
+// a certificate (the QL iteration made a NaN finite, and min(0, NaN) is 0).
+TEST(SdpSpectrum, NonFiniteInputGivesNaNSpectraAndBounds) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int n : {2, 5, 70}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n);
+    A(n - 1, 0) = A(0, n - 1) = nan;
+    EXPECT_TRUE(eigenvalues_of(A).array().isNaN().all());
+    Eigen::MatrixXcd H = Eigen::MatrixXcd::Identity(n, n);
+    H(1, 0) = std::complex<double>(std::numeric_limits<double>::infinity(), 0.0);
+    H(0, 1) = std::conj(H(1, 0));
+    EXPECT_TRUE(eigenvalues_of(H).array().isNaN().all());
+    Eigen::VectorXd values;
+    Eigen::MatrixXd vectors;
+    lowest_eigenpairs(A, 1, values, vectors);
+    EXPECT_TRUE(values.array().isNaN().all());
+    EXPECT_TRUE(vectors.array().isNaN().all());
+  }
+  fact::sdp::detail::Certificate cert;
+  cert.lambda = Eigen::MatrixXd::Identity(4, 2);
+  cert.trace_lambda = 2.0;
+  cert.eigenvalues = Eigen::VectorXd::Constant(4, nan);
+  fact::sdp::detail::bound_from_spectrum(cert);
+  EXPECT_TRUE(std::isnan(cert.min_eig));
+  EXPECT_TRUE(std::isnan(cert.dual_bound));
 }
 
 TEST(SdpSpectrum, LowestEigenvectorsAtAnyScale) {

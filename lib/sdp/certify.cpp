@@ -36,9 +36,11 @@ double eigensolver_error(Eigen::Index n, double scale) {
 
 void bound_from_spectrum(Certificate& cert) {
   cert.min_eig = cert.eigenvalues(0);
-  // ⟨C, X⟩ = tr Λ + ⟨S, X⟩ ≥ tr Λ + λ_min(S)·tr X for every feasible X, and tr X = n.
+  // ⟨C, X⟩ = tr Λ + ⟨S, X⟩ ≥ tr Λ + λ_min(S)·tr X for every feasible X, and tr X = n. (A NaN
+  // λ_min gives a NaN bound: std::min(0.0, NaN) would give 0 and a finite bound.)
   const Eigen::Index n = cert.eigenvalues.size();
-  cert.dual_bound = cert.trace_lambda + static_cast<double>(n) * std::min(0.0, cert.min_eig);
+  const double negative_part = cert.min_eig >= 0 ? 0.0 : cert.min_eig;
+  cert.dual_bound = cert.trace_lambda + static_cast<double>(n) * negative_part;
   // What rounding can have moved it by: n·e, e the eigensolver's backward error on λ_min; the
   // sum tr Λ (n terms, (n + 2)ε relative to Σ|Λ_jj| with n·|λ_min| added); and C's scaling, ε
   // per entry of the scaled C (|X_jk| ≤ 1 on the feasible set, Σ|C_jk| ≤ n‖C‖_F = n).

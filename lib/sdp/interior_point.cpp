@@ -151,8 +151,9 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
 // N = 5 … 8); e = 1, 1.5 and SDPT3's max(1, 3·min(α_p, α_d)²) did about as well, e = 2.5 gained
 // less, 4 and 6 lost. Above 48 rows (N = 40, 56, 64; 10 seeds) e = 2 measured 0.95–1.14 with
 // single instances to 1.57×, and on the complex interior point 0.94–1.05 with outliers to 1.64×
-// (BENCHMARKS.md, session 28). A negative ratio (unequal primal and dual steps) gives σ = 0, as the
-// cube's clamp did.
+// (BENCHMARKS.md, session 28). A negative ratio (⟨X + αΔX, Z + βΔZ⟩ < 0 only by rounding, or after a
+// Lanczos estimate's predictor step past the boundary from 24 rows) gives σ = 0, as the cube's clamp
+// did.
 constexpr int kSquareCentringMaxSize = 48;
 double centring(double mu_aff, double mu, int n) {
   const double ratio = std::max(0.0, mu_aff / mu);

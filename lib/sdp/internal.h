@@ -148,7 +148,8 @@ bool cholesky_in_place(Matrix& A) {
 // eigenvectors of the k ≤ n smallest (n × k, orthonormal): tridiagonalize with the reflectors kept,
 // tridiagonal_eigenvalues, then inverse iteration on the tridiagonal matrix at each of the k
 // eigenvalues and the reflectors applied back (O(n²) a vector); unit vectors for A = 0; Eigen's full
-// decomposition only if the QL iteration fails or a vector comes out non-finite.
+// decomposition only if the QL iteration fails or a vector comes out non-finite or not of unit
+// length. NaN eigenvalues and vectors for a non-finite A.
 void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors);
 void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors);
 
@@ -201,7 +202,7 @@ void tridiagonalize(Eigen::MatrixXd& A, Eigen::VectorXd& diagonal, Eigen::Vector
 bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2);
 
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending: tridiagonalize and
-// tridiagonal_eigenvalues (Eigen's QR only if that fails).
+// tridiagonal_eigenvalues (Eigen's QR only if that fails); all NaN for a non-finite A.
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A);
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A);
 

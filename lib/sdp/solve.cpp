@@ -484,7 +484,7 @@ void classify(Result& r, const Candidate& c, const Options& o) {
   } else if (const double infeasible = feasibility_error(c.Y, r.d); !(infeasible <= kFeasibilityTol)) {
     r.reason = printed("%s gave an infeasible X: a block of Y Yᵀ is off I by %g", to_string(c.method), infeasible) + note;
     r.status = Status::not_certified;
-  } else if (r.min_eig_S < -o.psd_tol) {
+  } else if (!(r.min_eig_S >= -o.psd_tol)) {  // (NaN too)
     r.reason = printed("S = C − Λ has λ_min = %g < −%g after %d %s iterations", r.min_eig_S, o.psd_tol, r.iterations,
                        to_string(c.method)) + note;
     r.status = Status::not_certified;

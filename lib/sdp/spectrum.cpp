@@ -38,8 +38,9 @@ struct Reflectors {
 // symmetric tridiagonal matrix with the same eigenvalues: diagonal (n) and subdiagonal (n − 1;
 // only its entries' magnitudes are defined). scratch is 2n. Step k reflects the column below the
 // diagonal, x (m = n − k − 1 entries), onto −phase(x₀)‖x‖e₁ with H = I − τ v vᴴ,
-// v = x + phase(x₀)‖x‖e₁, and updates the trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᴴ − w vᴴ
-// with w = τ A₂₂ v − (τ² vᴴA₂₂v / 2) v. With `kept`, v overwrites x and τ, beta are recorded.
+// v = x + phase(x₀)‖x‖e₁ (x/‖x‖ + phase(x₀)e₁ when ‖x‖ ≤ kTinyColumn, τ = 2/‖v‖² either way), and
+// updates the trailing m × m block A₂₂ ← H A₂₂ H = A₂₂ − v wᴴ − w vᴴ with
+// w = τ A₂₂ v − (τ² vᴴA₂₂v / 2) v. With `kept`, v overwrites x and τ, beta are recorded.
 template <class Matrix, class Vector>
 void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& subdiagonal, Vector& scratch,
                          Reflectors<typename Matrix::Scalar>* kept = nullptr) {
@@ -199,6 +200,10 @@ void tridiagonal_form(Eigen::MatrixXcd& A, Eigen::VectorXd& diagonal, Eigen::Vec
 // i + 1 swapped when the subdiagonal entry is larger); a pivot of 0 (σ an eigenvalue to the last
 // bit) is replaced by `tiny`, which only scales x. Work vectors u0, u1, u2 (n): U's diagonal
 // and its two superdiagonals.
+// The smallest pivot solve_shifted_tridiagonal divides by (T scaled to ‖T‖ = 1): growth of at most
+// 1e30 a solve keeps the iterate's squared norm in range.
+constexpr double kPivotFloor = 1e-30;
+
 void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny,
                                Eigen::VectorXd& b, Eigen::VectorXd& u0, Eigen::VectorXd& u1, Eigen::VectorXd& u2) {
   const Eigen::Index n = a.size();
@@ -231,7 +236,12 @@ void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& 
     double value = b[i];
     if (i + 1 < n) value -= u1[i] * b[i + 1];
     if (i + 2 < n) value -= u2[i] * b[i + 2];
-    b[i] = value / u0[i];
+    // A pivot below kPivotFloor counts as kPivotFloor: an eigenvalue split off by a coupling of
+    // 1e-80 … 1e-150 left a pivot that small after a row swap, and the iterate grew until its norm
+    // overflowed and normalised to zero (review, session 28). The usual last pivot, ε-sized against
+    // ‖T‖ = 1, is far above the floor, so results elsewhere do not change.
+    const double pivot = std::abs(u0[i]) < kPivotFloor ? std::copysign(kPivotFloor, u0[i]) : u0[i];
+    b[i] = value / pivot;
   }
 }
 
@@ -347,19 +357,28 @@ void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e,
   const Eigen::Index n = a.size();
   Eigen::VectorXd u(n), u0(n), u1(n), u2(n);  // iterate and the elimination's work vectors
   for (Eigen::Index i = 0; i < n; ++i) u[i] = 1.0 + 0.5 * std::sin(1.3 * i + 0.7 * j);  // fixed, generic start
+  const auto unit = [](Eigen::VectorXd& x) {  // (scaled first only if the squared norm overflows)
+    if (std::isfinite(x.squaredNorm())) x.normalize(); else x.stableNormalize();
+  };
   for (int step = 0; step < kInverseIterations; ++step) {
-    u.normalize();
+    unit(u);
     solve_shifted_tridiagonal(a, e, sigma, tiny, u, u0, u1, u2);
     for (int pass = 0; pass < 2; ++pass)
       for (int i = 0; i < j; ++i) u -= found.col(i).dot(u) * found.col(i);
   }
-  found.col(j) = u.normalized();
+  unit(u);
+  found.col(j) = u;
 }
 
 template <class Matrix>
 void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors) {
   using Scalar = typename Matrix::Scalar;
   const Eigen::Index n = original.rows();
+  if (!original.allFinite()) {  // as eigenvalues_impl: a NaN spectrum, never a finite-looking one
+    eigenvalues = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN());
+    vectors = Matrix::Constant(n, k, std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
   Matrix A;  // n × n: A's copy in range, reduced in place, the reflectors' v below its diagonal
   const double unit = copy_in_range(original, A);
   Eigen::VectorXd diagonal(n), subdiagonal(std::max<Eigen::Index>(n, 1));  // of T, one spare entry for tqlrat
@@ -395,7 +414,8 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     sigma = j > 0 ? std::max(value, sigma + 10 * eps) : value;
     tridiagonal_eigenvector(a, off, sigma, eps, j, found);
   }
-  if (!found.allFinite()) return from_eigen();  // not seen in tests
+  // (not seen in tests: a vector lost to overflow would have come out zero, review, session 28)
+  if (!found.allFinite() || ((found.colwise().norm().array() - 1.0).abs() > 1e-6).any()) return from_eigen();
   // Back to A: x = Q D u, D = diag(d) unitary with d₀ = 1, d_{i+1} = d_i beta_i / |beta_i| (so that
   // D T Dᴴ is the reduced matrix), Q = H₀ H₁ ⋯ H_{n−3}.
   vectors.resize(n, k);

@@ -95,7 +95,7 @@ double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
     const double lo = x + 1.0 / s1, hi = x + n / s1;  // λ_min ∈ [lo, hi]
     if (hi - lo <= tolerance(lo)) return lo;
     const double next = x + n / (s1 + std::sqrt(std::max(0.0, (n - 1.0) * (n * s2 - s1 * s1))));
-    if (!(next > x)) return lo;  // no progress left in floating point
+    if (!(next > x)) return bisect_from_below(a, b, lo, hi, relative, absolute);  // no progress left
     if (!inverse_power_sums(a, b, next, s1, s2)) {  // λ_min ≤ next
       const double below = next - 0.5 * tolerance(next);
       if (below <= lo) return lo;  // lo is within the tolerance of next
@@ -418,6 +418,9 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
 // bracketed λ_min to the same widths: about 10 counts of n dependent divisions each.)
 double StepLength::from_min_eigenvalue_of_B(double tau) {
   tridiagonalize(B_, diagonal_, subdiagonal_, work_);
+  // (a non-finite B, from a non-finite direction: no step; Sturm counts would read NaN as no
+  // eigenvalue below −τ and take the full one)
+  if (!diagonal_.allFinite() || !subdiagonal_.allFinite()) return 0.0;
   if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
   const double start = -1.01 * gershgorin_radius(diagonal_, subdiagonal_);  // below λ_min
   double lo = lowest_from_below(diagonal_, subdiagonal_, start, tau >= 1.0 ? 1e-2 : 1e-3, 0.0);
