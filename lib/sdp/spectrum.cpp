@@ -195,15 +195,15 @@ void tridiagonal_form(Eigen::MatrixXcd& A, Eigen::VectorXd& diagonal, Eigen::Vec
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch);
 }
 
+// The smallest pivot solve_shifted_tridiagonal divides by (T scaled to ‖T‖ = 1): growth of at most
+// 1e30 a solve keeps the iterate's squared norm in range.
+constexpr double kPivotFloor = 1e-30;
+
 // Solves (T − σI) x = b in place (b becomes x) for the real symmetric tridiagonal T with diagonal
 // a (n) and off-diagonal e (n − 1), by Gaussian elimination with partial pivoting (row i and
 // i + 1 swapped when the subdiagonal entry is larger); a pivot of 0 (σ an eigenvalue to the last
 // bit) is replaced by `tiny`, which only scales x. Work vectors u0, u1, u2 (n): U's diagonal
 // and its two superdiagonals.
-// The smallest pivot solve_shifted_tridiagonal divides by (T scaled to ‖T‖ = 1): growth of at most
-// 1e30 a solve keeps the iterate's squared norm in range.
-constexpr double kPivotFloor = 1e-30;
-
 void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny,
                                Eigen::VectorXd& b, Eigen::VectorXd& u0, Eigen::VectorXd& u1, Eigen::VectorXd& u2) {
   const Eigen::Index n = a.size();
@@ -414,7 +414,7 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     sigma = j > 0 ? std::max(value, sigma + 10 * eps) : value;
     tridiagonal_eigenvector(a, off, sigma, eps, j, found);
   }
-  // (not seen in tests: a vector lost to overflow would have come out zero, review, session 28)
+  // (a safety net: before kPivotFloor a vector lost to overflow came out zero; review, session 28)
   if (!found.allFinite() || ((found.colwise().norm().array() - 1.0).abs() > 1e-6).any()) return from_eigen();
   // Back to A: x = Q D u, D = diag(d) unitary with d₀ = 1, d_{i+1} = d_i beta_i / |beta_i| (so that
   // D T Dᴴ is the reduced matrix), Q = H₀ H₁ ⋯ H_{n−3}.
