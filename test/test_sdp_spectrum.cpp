@@ -254,6 +254,33 @@ TEST(SdpSpectrum, LowestEigenvectorsOfANearlySplitMatrix) {
   }
 }
 
+// lowest_vector (λ_min by Laguerre's iteration, no spectrum) against lowest_eigenpairs' first vector:
+// the same eigenvector up to a unit factor, with a small residual, real and complex, n = 1 … 40.
+TEST(SdpSpectrum, LowestVectorIsLowestEigenpairsFirst) {
+  std::mt19937 rng(29);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n = 1; n <= 40; n += (n < 10 ? 1 : 7)) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd A = real_test_matrix(n, 0, 0.0, rng, gauss);
+    const Eigen::MatrixXcd G = gaussian_matrix<Eigen::MatrixXcd>(n, n, rng, gauss);
+    const Eigen::MatrixXcd H = G + G.adjoint();  // a simple λ_min (hermitian_test_matrix repeats it)
+    Eigen::VectorXd values;
+    Eigen::MatrixXd vectors;
+    lowest_eigenpairs(A, 1, values, vectors);
+    const Eigen::MatrixXd v = fact::sdp::detail::lowest_vector(A);
+    ASSERT_EQ(v.rows(), n);
+    ASSERT_EQ(v.cols(), 1);
+    const double scale = std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+    EXPECT_NEAR(std::abs(v.col(0).dot(vectors.col(0))), 1.0, 1e-10);
+    EXPECT_LT((A * v - values[0] * v).norm() / scale, 1e-12);
+    Eigen::MatrixXcd complex_vectors;
+    lowest_eigenpairs(H, 1, values, complex_vectors);
+    const Eigen::MatrixXcd w = fact::sdp::detail::lowest_vector(H);
+    EXPECT_NEAR(std::abs(w.col(0).dot(complex_vectors.col(0))), 1.0, 1e-10);
+    EXPECT_LT((H * w - values[0] * w).norm() / std::max(values.cwiseAbs().maxCoeff(), 1e-300), 1e-12);
+  }
+}
+
 // Non-finite input gives NaN spectra and a NaN dual bound, never finite values that could pass for
 // a certificate (the QL iteration made a NaN finite, and min(0, NaN) is 0).
 TEST(SdpSpectrum, NonFiniteInputGivesNaNSpectraAndBounds) {

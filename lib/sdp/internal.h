@@ -153,6 +153,12 @@ bool cholesky_in_place(Matrix& A) {
 void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors);
 void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors);
 
+// The unit eigenvector of A's smallest eigenvalue (n × 1), as lowest_eigenpairs with k = 1 but
+// without the spectrum: λ_min by lowest_tridiagonal_eigenvalue instead of the QL iteration, which
+// was a quarter of a noise-free 8-drone solve (two 8 × 8 spectra, session 28).
+Eigen::MatrixXd lowest_vector(const Eigen::MatrixXd& A);
+Eigen::MatrixXcd lowest_vector(const Eigen::MatrixXcd& A);
+
 // The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
 // n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
@@ -162,6 +168,7 @@ template <class Matrix>
 Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const Eigen::Index n = M.rows();
   const auto from_tridiagonal = [&] {
+    if (k == 1) return Matrix(lowest_vector(M));
     Eigen::VectorXd eigenvalues;  // n, not used
     Matrix vectors;               // n × k
     lowest_eigenpairs(M, k, eigenvalues, vectors);

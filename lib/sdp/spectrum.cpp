@@ -371,7 +371,8 @@ void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e,
 }
 
 template <class Matrix>
-void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors) {
+void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors,
+                            bool spectrum = true) {
   using Scalar = typename Matrix::Scalar;
   const Eigen::Index n = original.rows();
   if (!original.allFinite()) {  // as eigenvalues_impl: a NaN spectrum, never a finite-looking one
@@ -386,15 +387,26 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   Reflectors<Scalar> kept{std::vector<double>(std::max<Eigen::Index>(n - 2, 0)),
                           std::vector<Scalar>(std::max<Eigen::Index>(n - 1, 0))};
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch, &kept);
-  eigenvalues = diagonal;
-  Eigen::VectorXd squares = subdiagonal.cwiseAbs2();
   const auto from_eigen = [&] {  // Eigen's decomposition, as eigenvalues_impl's fallback
     const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
     eigenvalues = eig.eigenvalues();
     vectors = eig.eigenvectors().leftCols(k);
   };
-  if (!tridiagonal_eigenvalues(eigenvalues, squares)) return from_eigen();
-  const double norm = eigenvalues.cwiseAbs().maxCoeff();  // ‖T‖₂ = ‖A‖₂ / unit
+  double norm;  // ‖T‖₂ = ‖A‖₂ / unit, or a Gershgorin bound on it
+  const Eigen::VectorXd off_diagonal = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0));  // |beta|, n − 1
+  if (spectrum || k > 1) {
+    eigenvalues = diagonal;
+    Eigen::VectorXd squares = subdiagonal.cwiseAbs2();
+    if (!tridiagonal_eigenvalues(eigenvalues, squares)) return from_eigen();
+    norm = eigenvalues.cwiseAbs().maxCoeff();
+  } else {  // one vector and no spectrum: λ_min alone by Laguerre's iteration (lowest_vector)
+    const double lowest = lowest_tridiagonal_eigenvalue(diagonal, off_diagonal);
+    if (!std::isfinite(lowest)) return from_eigen();
+    eigenvalues = Eigen::VectorXd::Constant(1, lowest);
+    norm = 0;
+    for (Eigen::Index i = 0; i < n; ++i)
+      norm = std::max(norm, std::abs(diagonal[i]) + (i > 0 ? off_diagonal[i - 1] : 0.0) + (i + 1 < n ? off_diagonal[i] : 0.0));
+  }
   eigenvalues *= unit;
   if (norm == 0) {  // A = 0: every vector is an eigenvector
     vectors = Matrix::Identity(n, k);
@@ -402,8 +414,8 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   }
   // The inverse iteration runs on T/‖T‖, so that a zero pivot's stand-in ε and the growth of the
   // iterate (up to 1/ε) stay in range whatever A's scale is.
-  const Eigen::VectorXd a = diagonal / norm;                                   // n
-  const Eigen::VectorXd off = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0)) / norm;  // |beta| / ‖T‖, n − 1
+  const Eigen::VectorXd a = diagonal / norm;        // n
+  const Eigen::VectorXd off = off_diagonal / norm;  // |beta| / ‖T‖, n − 1
   const double eps = std::numeric_limits<double>::epsilon();
   Eigen::MatrixXd found(n, k);  // eigenvectors of T, n × k
   double sigma = 0;             // shift, in units of ‖T‖
@@ -443,6 +455,19 @@ void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenva
 }
 void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors) {
   lowest_eigenpairs_impl(A, k, eigenvalues, vectors);
+}
+
+Eigen::MatrixXd lowest_vector(const Eigen::MatrixXd& A) {
+  Eigen::VectorXd eigenvalues;
+  Eigen::MatrixXd vector;
+  lowest_eigenpairs_impl(A, 1, eigenvalues, vector, false);
+  return vector;
+}
+Eigen::MatrixXcd lowest_vector(const Eigen::MatrixXcd& A) {
+  Eigen::VectorXd eigenvalues;
+  Eigen::MatrixXcd vector;
+  lowest_eigenpairs_impl(A, 1, eigenvalues, vector, false);
+  return vector;
 }
 
 }  // namespace fact::sdp::detail
