@@ -115,9 +115,17 @@ TEST(SdpSpectrum, ReductionReadsTheLowerTriangleAndKeepsReducedColumns) {
   }
 }
 
+// The symmetric tridiagonal matrix with diagonal a (k) and subdiagonal b (k − 1), dense k × k.
+Eigen::MatrixXd dense_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::MatrixXd T = a.asDiagonal();
+  for (Eigen::Index i = 0; i < b.size(); ++i) T(i + 1, i) = T(i, i + 1) = b[i];
+  return T;
+}
+
 // The smallest eigenvalue of a Lanczos-sized tridiagonal matrix (Laguerre's iteration from below,
-// bisection on Sturm counts at the floating-point range's edge) against Eigen's: random, diagonal
-// (whose Gershgorin end is λ_min itself), split, equal diagonals, tiny, huge and zero.
+// its bracket bisected after 12 steps; T scaled into range first) against Eigen's: random, diagonal
+// (whose Gershgorin end is λ_min itself), split, equal diagonals, tiny, huge, zero, and a λ_min
+// repeated k/2 times.
 TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
   std::mt19937 rng(19);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -141,9 +149,7 @@ TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
       const double scale = kind == 4 ? 1e-200 : kind == 5 ? 1e200 : kind == 6 ? 0.0 : 1.0;
       a *= scale;
       b *= scale;
-      Eigen::MatrixXd T = Eigen::MatrixXd::Zero(k, k);
-      T.diagonal() = a;
-      for (int i = 0; i + 1 < k; ++i) T(i + 1, i) = T(i, i + 1) = b[i];
+      const Eigen::MatrixXd T = dense_tridiagonal(a, b);
       const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T, Eigen::EigenvaluesOnly).eigenvalues()[0];
       const double lowest = fact::sdp::detail::lowest_tridiagonal_eigenvalue(a, b);
       EXPECT_LE(std::abs(lowest - exact), 1e-13 * T.cwiseAbs().maxCoeff()) << lowest << " against " << exact;
@@ -153,10 +159,8 @@ TEST(SdpSpectrum, LowestTridiagonalEigenvalueMatchesEigen) {
   Eigen::VectorXd a(3), b(2);
   a << 1e308, -1e308, 5e307;
   b << 1e308, 1e308;
-  Eigen::Matrix3d T = a.asDiagonal();
-  T(1, 0) = T(0, 1) = b[0];
-  T(2, 1) = T(1, 2) = b[1];
-  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(T / 1e308, Eigen::EigenvaluesOnly).eigenvalues()[0];
+  const Eigen::MatrixXd T = dense_tridiagonal(a, b);
+  const double exact = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(T / 1e308, Eigen::EigenvaluesOnly).eigenvalues()[0];
   EXPECT_NEAR(fact::sdp::detail::lowest_tridiagonal_eigenvalue(a, b) / 1e308, exact, 1e-13);
 }
 

@@ -29,6 +29,12 @@ Eigen::MatrixXd certificate_matrix(const Eigen::MatrixXd& C, const Eigen::Matrix
   return S;
 }
 
+double block_trace(const Eigen::MatrixXd& lambda, int d) {
+  double trace = 0;
+  for (Eigen::Index i = 0; i < lambda.rows(); i += d) trace += lambda.middleRows(i, d).trace();
+  return trace;
+}
+
 double eigensolver_error(Eigen::Index n, double scale) {
   return 4.0 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() *
          std::max(scale, std::numeric_limits<double>::min());
@@ -63,7 +69,7 @@ Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int
   } else {
     cert.eigenvalues = eigenvalues_of(S);
   }
-  for (Eigen::Index i = 0; i < C.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
+  cert.trace_lambda = block_trace(lambda, d);
   bound_from_spectrum(cert);
   return cert;
 }

@@ -44,6 +44,9 @@ void bound_from_spectrum(Certificate& cert);
 // least the smallest normal double), within which an eigenvalue counts as 0.
 double eigensolver_error(Eigen::Index n, double scale);
 
+// tr Λ for Λ's d × d diagonal blocks stacked (n × d): Σ_i tr Λ_ii.
+double block_trace(const Eigen::MatrixXd& lambda, int d);
+
 // Eigen-analysis of S for a given Λ. With want_vector, also the eigenvector of λ_min.
 Certificate certify(const Eigen::MatrixXd& C, const Eigen::MatrixXd& lambda, int d, bool want_vector);
 
@@ -212,6 +215,15 @@ bool tridiagonal_eigenvalues(Eigen::VectorXd& d, Eigen::VectorXd& e2);
 // tridiagonal_eigenvalues (Eigen's QR only if that fails); all NaN for a non-finite A.
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXd& A);
 Eigen::VectorXd eigenvalues_of(const Eigen::MatrixXcd& A);
+
+// The ends of the Gershgorin discs of the symmetric tridiagonal matrix with diagonal a (k ≥ 1) and
+// subdiagonal b (k − 1): every eigenvalue lies in [lo, hi], and radius() = max(hi, −lo) bounds
+// the spectral radius (step_length.cpp).
+struct GershgorinBounds {
+  double lo, hi;
+  double radius() const { return std::max(hi, -lo); }
+};
+GershgorinBounds gershgorin_bounds(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b);
 
 // The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a (k) and
 // subdiagonal b (k − 1), to within a few kε·‖T‖ (20 000 random, diagonal, zero, badly scaled and

@@ -138,7 +138,7 @@ bool provably_indefinite(const Eigen::MatrixXd& S, const Eigen::MatrixXd& Y, dou
 Certificate without_spectrum(const Eigen::MatrixXd& lambda, int d) {
   Certificate cert;
   cert.lambda = lambda;
-  for (Eigen::Index i = 0; i < lambda.rows(); i += d) cert.trace_lambda += lambda.middleRows(i, d).trace();
+  cert.trace_lambda = block_trace(lambda, d);
   cert.min_eig = cert.dual_bound = cert.bound_error = std::numeric_limits<double>::quiet_NaN();
   return cert;
 }

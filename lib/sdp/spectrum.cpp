@@ -403,9 +403,7 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     const double lowest = lowest_tridiagonal_eigenvalue(diagonal, off_diagonal);
     if (!std::isfinite(lowest)) return from_eigen();
     eigenvalues = Eigen::VectorXd::Constant(1, lowest);
-    norm = 0;
-    for (Eigen::Index i = 0; i < n; ++i)
-      norm = std::max(norm, std::abs(diagonal[i]) + (i > 0 ? off_diagonal[i - 1] : 0.0) + (i + 1 < n ? off_diagonal[i] : 0.0));
+    norm = gershgorin_bounds(diagonal, off_diagonal).radius();
   }
   eigenvalues *= unit;
   if (norm == 0) {  // A = 0: every vector is an eigenvector

@@ -107,15 +107,6 @@ double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
   return bisect_from_below(a, b, x + 1.0 / s1, x + n / s1, relative, absolute);  // converging linearly
 }
 
-// Gershgorin bound on the spectral radius of the tridiagonal (a, b).
-double gershgorin_radius(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
-  double radius = 0;
-  const Eigen::Index n = a.size();
-  for (Eigen::Index i = 0; i < n; ++i)
-    radius = std::max(radius, std::abs(a[i]) + (i > 0 ? std::abs(b[i - 1]) : 0.0) + (i + 1 < n ? std::abs(b[i]) : 0.0));
-  return radius;
-}
-
 // Lanczos steps of the corrector's estimate (n > kExactStepMaxSize). 12 against 24: the same
 // statuses, random full-rank C N = 25 / 32 / 48 / 64 0.81 / 0.84 / 0.90 / 0.91 of the time and the
 // paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150: 0.86–0.93 and 0.53–0.93); 8 was as fast
@@ -163,6 +154,17 @@ void times_block_diagonal_fixed(const Eigen::MatrixXd& P, const Eigen::MatrixXd&
 
 }  // namespace
 
+GershgorinBounds gershgorin_bounds(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
+  const Eigen::Index n = a.size();
+  GershgorinBounds bounds{a[0], a[0]};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double r = (i > 0 ? std::abs(b[i - 1]) : 0.0) + (i + 1 < n ? std::abs(b[i]) : 0.0);
+    bounds.lo = std::min(bounds.lo, a[i] - r);
+    bounds.hi = std::max(bounds.hi, a[i] + r);
+  }
+  return bounds;
+}
+
 double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) {
   if (!a.allFinite() || !b.allFinite()) return std::numeric_limits<double>::quiet_NaN();
   const double largest = std::max(a.cwiseAbs().maxCoeff(), b.size() > 0 ? b.cwiseAbs().maxCoeff() : 0.0);
@@ -171,17 +173,10 @@ double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a,
     const Eigen::VectorXd an = a / largest, bn = b / largest;
     return largest * lowest_tridiagonal_eigenvalue(an, bn);
   }
-  const double radius = gershgorin_radius(a, b);
-  const Eigen::Index k = a.size();
-  double lo = a[0], hi = a[0];  // λ_min ∈ [lo, hi]: the ends of the Gershgorin discs
-  for (Eigen::Index i = 0; i < k; ++i) {
-    const double r = (i > 0 ? std::abs(b[i - 1]) : 0.0) + (i + 1 < k ? std::abs(b[i]) : 0.0);
-    lo = std::min(lo, a[i] - r);
-    hi = std::max(hi, a[i] + r);
-  }
-  const double width = 4.0 * std::numeric_limits<double>::epsilon() * radius;
-  // (lo may be λ_min itself, a diagonal T: the iteration starts below it)
-  return lowest_from_below(a, b, lo - 0.01 * (hi - lo) - width, 0.0, width);
+  const GershgorinBounds discs = gershgorin_bounds(a, b);  // λ_min ∈ [discs.lo, discs.hi]
+  const double width = 4.0 * std::numeric_limits<double>::epsilon() * discs.radius();
+  // (discs.lo may be λ_min itself, a diagonal T: the iteration starts below it)
+  return lowest_from_below(a, b, discs.lo - 0.01 * (discs.hi - discs.lo) - width, 0.0, width);
 }
 
 void symmetrize(Eigen::MatrixXd& A) {
@@ -422,7 +417,7 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
   // eigenvalue below −τ and take the full one)
   if (!diagonal_.allFinite() || !subdiagonal_.allFinite()) return 0.0;
   if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
-  const double start = -1.01 * gershgorin_radius(diagonal_, subdiagonal_);  // below λ_min
+  const double start = -1.01 * gershgorin_bounds(diagonal_, subdiagonal_).radius();  // below λ_min
   double lo = lowest_from_below(diagonal_, subdiagonal_, start, tau >= 1.0 ? 1e-2 : 1e-3, 0.0);
   if (std::isnan(lo)) lo = start;  // (not expected: the Gershgorin bound is below λ_min)
   // (lo ≥ −τ only by rounding, the Sturm count above and Laguerre's pivots disagreeing near −τ)

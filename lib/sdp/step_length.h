@@ -4,8 +4,8 @@
 // With P = L Lᵀ, P + αΔ ≻ 0  ⇔  I + α B ≻ 0  for  B = L⁻¹ Δ L⁻ᵀ (n × n, symmetric), so the
 // boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n, B is
 // reduced to a tridiagonal matrix (Householder) and λ_min is bounded from below by Laguerre's
-// iteration; for large n a Lanczos estimate is used. All work matrices live in a StepLength object that
-// the interior point allocates once.
+// iteration; for large n a Lanczos estimate is used. All work matrices live in a StepLength
+// object that the interior point allocates once.
 #pragma once
 
 #include <Eigen/Dense>
