@@ -409,6 +409,23 @@ TEST(SdpKernels, ExactStepLengthsStopWithinTheirToleranceOfTheBoundary) {
   }
 }
 
+// Mehrotra's centring σ = min(1, (μ_aff/μ)^e): the square and the cube, the clamp at 1 when the
+// predictor's step made the complementarity grow, and 0 for a ratio below zero (a rounding
+// overshoot of ⟨X + αΔX, Z + βΔZ⟩) or NaN, where the power would give a negative or NaN σ.
+TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
+  using fact::sdp::detail::mehrotra_centring;
+  EXPECT_DOUBLE_EQ(mehrotra_centring(0.5, 1.0, 2), 0.25);
+  EXPECT_DOUBLE_EQ(mehrotra_centring(0.5, 1.0, 3), 0.125);
+  EXPECT_DOUBLE_EQ(mehrotra_centring(3e-6, 1e-5, 3), 0.027);
+  EXPECT_EQ(mehrotra_centring(2.0, 1.0, 2), 1.0);
+  EXPECT_EQ(mehrotra_centring(1.0, 1.0, 3), 1.0);
+  EXPECT_EQ(mehrotra_centring(0.0, 1.0, 2), 0.0);
+  EXPECT_EQ(mehrotra_centring(-1e-18, 1.0, 2), 0.0);
+  EXPECT_EQ(mehrotra_centring(-0.5, 1.0, 3), 0.0);
+  EXPECT_EQ(mehrotra_centring(std::nan(""), 1.0, 2), 0.0);
+  EXPECT_EQ(mehrotra_centring(1.0, std::nan(""), 3), 0.0);
+}
+
 // SpdSolver on both of its paths (cholesky_lower to 64 rows, right-looking below 24 and by columns
 // from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for A = B Bᵀ + n I, with
 // x aliasing b; false and a NaN solution for an indefinite A.

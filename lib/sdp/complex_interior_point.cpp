@@ -229,7 +229,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     const double ap_aff = primal_step(X, ws.dx_aff, ws, 1.0);
     const double ad_aff = dual_step(Z, H, y, ws.dy_aff, ws, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dy_aff, ad_aff) / static_cast<double>(N);
-    const double sigma = std::clamp(std::pow(mu_aff / mu, 3.0), 0.0, 1.0);
+    const double sigma = mehrotra_centring(mu_aff, mu, 3);
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
     ws.P.noalias() = -ws.dx_aff * ws.dy_aff.asDiagonal();  // ΔX_a ΔZ_a
     for (Eigen::Index i = 0; i < N; ++i) {

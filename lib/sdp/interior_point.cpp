@@ -36,6 +36,14 @@ void lambda_from_y(const Eigen::VectorXd& y, const std::vector<Entry>& entries, 
   }
 }
 
+double mehrotra_centring(double mu_aff, double mu, int exponent) {
+  const double ratio = mu_aff / mu;
+  if (!(ratio > 0)) return 0.0;  // negative by rounding, or NaN
+  double sigma = ratio;
+  for (int k = 1; k < exponent; ++k) sigma *= ratio;
+  return std::min(1.0, sigma);
+}
+
 // For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα.
 void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
                       Eigen::MatrixXd& M) {
@@ -144,21 +152,15 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
   return cholesky_in_place(Z) ? shift : 2.0;
 }
 
-// Mehrotra's centring σ = (μ_aff/μ)^e from the predictor's complementarity μ_aff: e = 2 up to
-// kSquareCentringMaxSize rows (N = 24), the usual e = 3 above. Sweep (6 seeds, N = 5 … 32, two runs),
-// e = 2 against 3: plain / low rank / random full rank / the paper's cost 0.85–0.97 of the time at
-// N = 5 … 16 and 0.95–1.01 at N = 24, no status changes (8 seeds, when taken: 0.90–0.97 at
-// N = 5 … 8); e = 1, 1.5 and SDPT3's max(1, 3·min(α_p, α_d)²) did about as well, e = 2.5 gained
-// less, 4 and 6 lost. Above 48 rows (N = 40, 56, 64; 10 seeds) e = 2 measured 0.95–1.14 with
-// single instances to 1.57×, and on the complex interior point 0.94–1.05 with outliers to 1.64×
-// (BENCHMARKS.md, session 28). A negative ratio (⟨X + αΔX, Z + βΔZ⟩ < 0 only by rounding, or after a
-// Lanczos estimate's predictor step past the boundary from 24 rows) gives σ = 0, as the cube's clamp
-// did.
+// The real interior point's centring exponent (mehrotra_centring): 2 up to kSquareCentringMaxSize
+// rows (N = 24), the usual 3 above. Sweep (6 seeds, N = 5 … 32, two runs), 2 against 3: plain /
+// low rank / random full rank / the paper's cost 0.85–0.97 of the time at N = 5 … 16 and
+// 0.95–1.01 at N = 24, no status changes (8 seeds, when taken: 0.90–0.97 at N = 5 … 8); 1, 1.5
+// and SDPT3's max(1, 3·min(α_p, α_d)²) did about as well, 2.5 gained less, 4 and 6 lost. Above 48
+// rows (N = 40, 56, 64; 10 seeds) 2 measured 0.95–1.14 with single instances to 1.57×, and on the
+// complex interior point 0.94–1.05 with outliers to 1.64× (BENCHMARKS.md, session 28).
 constexpr int kSquareCentringMaxSize = 48;
-double centring(double mu_aff, double mu, int n) {
-  const double ratio = std::max(0.0, mu_aff / mu);
-  return std::min(1.0, n <= kSquareCentringMaxSize ? ratio * ratio : ratio * ratio * ratio);
-}
+int centring_exponent(int n) { return n <= kSquareCentringMaxSize ? 2 : 3; }
 
 }  // namespace
 
@@ -233,7 +235,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     const double ap_aff = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx_aff, 1.0);
     const double ad_aff = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
-    const double sigma = centring(mu_aff, mu, n);
+    const double sigma = mehrotra_centring(mu_aff, mu, centring_exponent(n));
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
     // A(T) needs only T's diagonal blocks: A(σμW − X) − A((ΔX_a ΔZ_a) W).
     times_block_diagonal(ws.dx_aff, ws.dz_aff, d, ws.P);  // ΔX_a ΔZ_a

@@ -300,6 +300,12 @@ struct LowRankOutcome {
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease = 0,
                               bool spectrum_only_if_certifiable = false);
 
+// Mehrotra's centring σ = min(1, (μ_aff/μ)^exponent) from the predictor's complementarity μ_aff
+// (after the affine step) and the current μ, for both interior points; 0 when the ratio is not
+// positive (⟨X + αΔX, Z + βΔZ⟩ < 0 only by rounding, or after a Lanczos estimate's predictor step
+// past the boundary) or NaN (interior_point.cpp).
+double mehrotra_centring(double mu_aff, double mu, int exponent);
+
 // Below this relative gap both interior points form the primal direction's P Z⁻¹ through Z's
 // Cholesky factor instead of the product P·W: near the optimum W's entries grow as 1/μ and the
 // product loses the digits the last iterations need; before that the product is cheaper
