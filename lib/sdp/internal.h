@@ -138,13 +138,24 @@ double damped_newton_step(Eigen::MatrixXd& H, SpdSolver& llt, const Eigen::Vecto
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// From this size on cholesky_in_place takes Eigen's blocked kernel, below it the unblocked one.
+// Eigen's blocked kernel cuts blocks of size/8 rounded down to a multiple of 16 but at least 8,
+// so every n from 32 to 127 gets 8-column blocks, whose triangular solves and rank-8 updates cost
+// more than they save: n = 32 / 48 / 64 / 100 took 5.2 / 11.5 / 20.5 / 53 µs blocked against
+// 1.9 / 4.8 / 10.3 / 31 µs unblocked (complex), 2.5 / 5.0 / 8.7 / 22 against 0.95 / 2.3 / 4.6 /
+// 14 µs (real); below 32 Eigen itself calls the unblocked kernel, and from n = 128 blocked is as
+// fast or faster (n = 200 complex 240 against 273 µs; BENCHMARKS.md, session 29).
+constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
+
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
-// triangle by Eigen's blocked kernel; false when A is not positive definite. Eigen::LLT::compute
-// would also sum |a_ij| for a condition estimate that nothing here reads: for complex entries a
-// hypot per entry, 8 % of the complex interior point's time at N = 100 (BENCHMARKS.md, session 13).
+// triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize and its blocked one from it;
+// false when A is not positive definite. Eigen::LLT::compute would also sum |a_ij| for a condition
+// estimate that nothing here reads: for complex entries a hypot per entry, 8 % of the complex
+// interior point's time at N = 100 (BENCHMARKS.md, session 13).
 template <class Matrix>
 bool cholesky_in_place(Matrix& A) {
-  return Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>::blocked(A) == -1;
+  using Kernel = Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>;
+  return (A.rows() < kBlockedCholeskyMinSize ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1;
 }
 
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
