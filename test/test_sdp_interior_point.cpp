@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <utility>
 
 
 #include "internal.h"
@@ -447,6 +449,47 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
     solver.solve(b, x);
     EXPECT_TRUE(x.array().isNaN().all());
   }
+}
+
+// cholesky_in_place on both of its paths (Eigen's unblocked kernel below 128 rows, its blocked one
+// from 128), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
+// was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
+// negative first pivot) and for a NaN or infinite entry on the diagonal or below it.
+template <class Matrix>
+void expect_cholesky_on_every_path(std::mt19937& rng) {
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {1, 2, 5, 31, 32, 100, 127, 128, 140}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
+    const Matrix A = B * B.adjoint() + Matrix::Identity(n, n);
+    Matrix L = A;
+    L.template triangularView<Eigen::StrictlyUpper>().setConstant(7.0);  // must stay untouched
+    ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
+    EXPECT_TRUE((L.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().array() ==
+                 Matrix(Matrix::Constant(n, n, 7.0).template triangularView<Eigen::StrictlyUpper>()).array()).all());
+    const Matrix lower = L.template triangularView<Eigen::Lower>();
+    EXPECT_LT((lower * lower.adjoint() - A).cwiseAbs().maxCoeff(), 1e-13 * A.cwiseAbs().maxCoeff() * n);
+    EXPECT_TRUE((lower.diagonal().imag().array() == 0).all());
+    // λ_min(A) ≥ 1: A − (λ_min + 0.5)·I has one eigenvalue −0.5
+    const double lowest = Eigen::SelfAdjointEigenSolver<Matrix>(A).eigenvalues()[0];
+    Matrix indefinite = A - (lowest + 0.5) * Matrix::Identity(n, n);
+    EXPECT_FALSE(fact::sdp::detail::cholesky_in_place(indefinite));
+    Matrix negative_first = A;
+    negative_first(0, 0) = -1.0;
+    EXPECT_FALSE(fact::sdp::detail::cholesky_in_place(negative_first));
+    for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()})
+      for (const auto& [i, j] : {std::pair<int, int>{n - 1, n - 1}, {0, 0}, {n - 1, 0}}) {
+        Matrix with_bad = A;
+        with_bad(i, j) = bad;
+        EXPECT_FALSE(fact::sdp::detail::cholesky_in_place(with_bad)) << bad << " at (" << i << ", " << j << ")";
+      }
+  }
+}
+
+TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) {
+  std::mt19937 rng(23);
+  expect_cholesky_on_every_path<Eigen::MatrixXd>(rng);
+  expect_cholesky_on_every_path<Eigen::MatrixXcd>(rng);
 }
 
 // pivoted_rank: the rank of a PSD C = B Bᵀ (B n × r), and n (no null space) for an indefinite C,

@@ -149,13 +149,17 @@ constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
 
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
 // triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize and its blocked one from it;
-// false when A is not positive definite. Eigen::LLT::compute would also sum |a_ij| for a condition
-// estimate that nothing here reads: for complex entries a hypot per entry, 8 % of the complex
-// interior point's time at N = 100 (BENCHMARKS.md, session 13).
+// false when A is not positive definite or its lower triangle has a NaN or infinite entry.
+// Eigen::LLT::compute would also sum |a_ij| for a condition estimate that nothing here reads: for
+// complex entries a hypot per entry, 8 % of the complex interior point's time at N = 100
+// (BENCHMARKS.md, session 13).
 template <class Matrix>
 bool cholesky_in_place(Matrix& A) {
   using Kernel = Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>;
-  return (A.rows() < kBlockedCholeskyMinSize ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1;
+  // Eigen tests its pivots by x <= 0, which a NaN passes, and an infinite pivot has an infinite
+  // root: a NaN or infinite entry of the lower triangle ends up on L's diagonal, checked here.
+  return (A.rows() < kBlockedCholeskyMinSize ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
+         A.diagonal().real().allFinite();
 }
 
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
