@@ -492,6 +492,26 @@ TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) 
   expect_cholesky_on_every_path<Eigen::MatrixXcd>(rng);
 }
 
+// The 16 × 16 tiles of for_each_entry_below_diagonal visit every entry below the diagonal exactly
+// once, at sizes below, at and across a tile's edge; symmetrize through them gives (A + Aᵀ)/2 to the
+// last bit.
+TEST(SdpKernels, TiledLoopsVisitEveryEntryBelowTheDiagonalOnce) {
+  std::mt19937 rng(29);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {1, 2, 15, 16, 17, 33, 128, 130}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    Eigen::MatrixXi visits = Eigen::MatrixXi::Zero(n, n);
+    fact::sdp::detail::for_each_entry_below_diagonal(n, [&](Eigen::Index i, Eigen::Index j) { ++visits(i, j); });
+    const Eigen::MatrixXi expected = Eigen::MatrixXi::Ones(n, n).triangularView<Eigen::StrictlyLower>();
+    EXPECT_TRUE((visits.array() == expected.array()).all());
+    const Eigen::MatrixXd A = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    Eigen::MatrixXd symmetric = A;
+    fact::sdp::detail::symmetrize(symmetric);
+    const Eigen::MatrixXd average = 0.5 * (A + A.transpose());
+    EXPECT_TRUE((symmetric.array() == average.array()).all());
+  }
+}
+
 // pivoted_rank: the rank of a PSD C = B Bᵀ (B n × r), and n (no null space) for an indefinite C,
 // including one whose diagonal is 0 (blocks [[0, 1], [1, 0]]), which stops the pivoting at once.
 TEST(SdpKernels, PivotedRankCountsPsdRankAndSeesIndefiniteMatrices) {

@@ -61,15 +61,12 @@ struct Workspace {
 
 // Hermitian part in place: A ← (A + Aᴴ)/2.
 void hermitian_part(MatrixXcd& A) {
-  const Eigen::Index N = A.rows();
-  for (Eigen::Index j = 0; j < N; ++j) {
-    A(j, j) = A(j, j).real();
-    for (Eigen::Index i = j + 1; i < N; ++i) {
-      const std::complex<double> v = 0.5 * (A(i, j) + std::conj(A(j, i)));
-      A(i, j) = v;
-      A(j, i) = std::conj(v);
-    }
-  }
+  A.diagonal() = A.diagonal().real().cast<std::complex<double>>();
+  for_each_entry_below_diagonal(A.rows(), [&A](Eigen::Index i, Eigen::Index j) {
+    const std::complex<double> v = 0.5 * (A(i, j) + std::conj(A(j, i)));
+    A(i, j) = v;
+    A(j, i) = std::conj(v);
+  });
 }
 
 // Lanczos steps of the step-length estimate, predictor and corrector alike. The corrector's step

@@ -180,8 +180,9 @@ double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a,
 }
 
 void symmetrize(Eigen::MatrixXd& A) {
-  for (Eigen::Index j = 0; j < A.cols(); ++j)
-    for (Eigen::Index i = j + 1; i < A.rows(); ++i) A(i, j) = A(j, i) = 0.5 * (A(i, j) + A(j, i));
+  for_each_entry_below_diagonal(A.rows(), [&A](Eigen::Index i, Eigen::Index j) {
+    A(i, j) = A(j, i) = 0.5 * (A(i, j) + A(j, i));
+  });
 }
 
 void times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, int d, Eigen::MatrixXd& out) {
