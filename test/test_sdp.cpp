@@ -779,6 +779,14 @@ std::vector<BadInput> bad_inputs() {
   cases.push_back({"N = 0", Eigen::MatrixXd(0, 0), 2, {"N = 0"}});
   cases.push_back({"d = 3", random_psd(6, 4), 3, {"d = 3"}});
   cases.push_back({"d = 0", random_psd(6, 4), 0, {"d = 0"}});
+  // ‖C‖_F = 4e308 overflows; the scale became inf and a zero C was certified (review, session 29)
+  Eigen::MatrixXd huge(4, 4);
+  huge << 1, 1, 0, 0, 1, 1, 0, 0, 0, 0, 1, -1, 0, 0, -1, 1;
+  cases.push_back({"entries of 1e308", 1e308 * huge, 1, {"too large", "C(0,0) = 1e+308"}});
+  // ‖C‖_F = 1.3e307 is finite, but the optimum −1.7e309 is not: certified with objective −inf
+  cases.push_back({"optimum beyond a double", -1e307 * Eigen::MatrixXd::Ones(13, 13), 1, {"too large", "n = 13"}});
+  // the unscaled Λ is rounded to the subnormal grid: λ_min(C − Λ) = −1.3e-8·‖C‖_F, certified unique
+  cases.push_back({"subnormal entries", 1e-318 * random_psd(8, 8), 2, {"subnormal", "scale C up"}});
   return cases;
 }
 
@@ -794,6 +802,51 @@ TEST(SdpInvalidInput, EveryBadInputIsRejectedWithAReason) {
       EXPECT_NE(why.find(s), std::string::npos) << "validate: '" << why << "' lacks '" << s << "'";
       EXPECT_NE(r.reason.find(s), std::string::npos) << "solve: '" << r.reason << "' lacks '" << s << "'";
     }
+  }
+}
+
+// Options out of their range: the reason names the field and its value; the defaults validate.
+TEST(SdpInvalidInput, BadOptionsAreRejectedWithAReason) {
+  const Eigen::MatrixXd C = random_psd(4, 5);
+  EXPECT_EQ(fact::sdp::validate(Options{}), "");
+  const auto with = [](auto change) {
+    Options o;
+    change(o);
+    return o;
+  };
+  const std::vector<std::pair<Options, std::string>> cases = {
+      {with([](Options& o) { o.gap_tol = std::numeric_limits<double>::quiet_NaN(); }), "gap_tol = nan"},
+      {with([](Options& o) { o.psd_tol = -1e-9; }), "psd_tol = -1e-09"},
+      {with([](Options& o) { o.null_tol = std::numeric_limits<double>::infinity(); }), "null_tol = inf"},
+      {with([](Options& o) { o.max_sweeps = -1; }), "max_sweeps = -1"},
+      {with([](Options& o) { o.max_ipm_iterations = -5; }), "max_ipm_iterations = -5"},
+      {with([](Options& o) { o.max_newton_iterations = -2; }), "max_newton_iterations = -2"},
+      {with([](Options& o) { o.max_rank = -3; }), "max_rank = -3"},
+      {with([](Options& o) { o.method = static_cast<fact::sdp::Method>(17); }), "method = 17"},
+  };
+  for (const auto& [options, field] : cases) {
+    SCOPED_TRACE(field);
+    EXPECT_NE(fact::sdp::validate(options).find(field), std::string::npos) << fact::sdp::validate(options);
+    const Result r = fact::sdp::solve(C, 2, options);
+    EXPECT_EQ(r.status, Status::invalid_input);
+    EXPECT_NE(r.reason.find(field), std::string::npos) << r.reason;
+  }
+}
+
+// The edges of C's range solve: the largest entry just inside kLargestObjective/n² and
+// kSmallestEntry, each with the status and objective (scaled) of the same C at scale 1.
+TEST(SdpInvalidInput, EntriesAtTheEdgesOfTheRangeSolve) {
+  const Eigen::MatrixXd C = random_psd(6, 7);
+  const Result base = fact::sdp::solve(C, 2);
+  ASSERT_TRUE(base.certified()) << base.reason;
+  const double largest = C.cwiseAbs().maxCoeff();
+  for (const double s : {0.99 * fact::sdp::kLargestObjective / 36 / largest, 1.01 * fact::sdp::kSmallestEntry / largest}) {
+    SCOPED_TRACE("scale " + std::to_string(std::log10(s)));
+    EXPECT_EQ(fact::sdp::validate(s * C, 2), "");
+    const Result r = fact::sdp::solve(s * C, 2);
+    EXPECT_EQ(r.status, base.status) << r.reason;
+    EXPECT_NEAR(r.objective / s, base.objective, 1e-9 * std::abs(base.objective));
+    EXPECT_TRUE(std::isfinite(r.dual_bound) && std::isfinite(r.bound_error));
   }
 }
 

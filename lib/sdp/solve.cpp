@@ -522,6 +522,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   Result r;
   r.d = d;
   r.reason = validate(C, d);
+  if (r.reason.empty()) r.reason = validate(options);
   if (!r.reason.empty()) return r;
   r.blocks = static_cast<int>(C.rows() / d);
   // ‖C‖_F without overflow or underflow: C.norm() is inf from entries of 1e154 on and 0 below

@@ -38,11 +38,44 @@ std::string validate(const Eigen::MatrixXd& C, int d) {
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = 0; i < C.rows(); ++i)
       if (!std::isfinite(C(i, j))) return printed("C(%td,%td) = %g: not finite", i, j, C(i, j));
-  const double tol = 1e-9 * C.cwiseAbs().maxCoeff();  // relative to C's own scale, whatever it is
+  const double largest = C.cwiseAbs().maxCoeff();
+  const double n = static_cast<double>(C.rows());
+  Eigen::Index largest_row = 0, largest_col = 0;  // where it is: only for the messages
+  if (largest > kLargestObjective / (n * n) || (largest > 0 && largest < kSmallestEntry))
+    C.cwiseAbs().maxCoeff(&largest_row, &largest_col);
+  if (largest > kLargestObjective / (n * n))
+    return printed("C(%td,%td) = %g: too large for n = %td; max|C_ij| must stay below %g/n² = %g, or the objective "
+                   "(up to n²·max|C_ij|) may not be a finite double",
+                   largest_row, largest_col, C(largest_row, largest_col), C.rows(), kLargestObjective,
+                   kLargestObjective / (n * n));
+  if (largest > 0 && largest < kSmallestEntry)
+    return printed("C(%td,%td) = %g is C's largest entry: below %g the certificate's multipliers, of C's scale, lose "
+                   "their digits to subnormal rounding (scale C up; C = 0 itself is accepted)",
+                   largest_row, largest_col, C(largest_row, largest_col), kSmallestEntry);
+  const double tol = 1e-9 * largest;  // relative to C's own scale, whatever it is
   for (Eigen::Index j = 0; j < C.cols(); ++j)
     for (Eigen::Index i = j + 1; i < C.rows(); ++i)
       if (std::abs(C(i, j) - C(j, i)) > tol)
         return printed("C not symmetric: C(%td,%td) = %.17g but C(%td,%td) = %.17g", i, j, C(i, j), j, i, C(j, i));
+  return {};
+}
+
+std::string validate(const Options& options) {
+  const auto tolerance = [](const char* name, double value) {
+    return std::isfinite(value) && value >= 0 ? std::string() : printed("%s = %g: must be finite and ≥ 0", name, value);
+  };
+  const auto count = [](const char* name, int value) {
+    return value >= 0 ? std::string() : printed("%s = %d: must be ≥ 0", name, value);
+  };
+  for (const std::string& why :
+       {tolerance("gap_tol", options.gap_tol), tolerance("psd_tol", options.psd_tol),
+        tolerance("null_tol", options.null_tol), count("max_sweeps", options.max_sweeps),
+        count("max_ipm_iterations", options.max_ipm_iterations),
+        count("max_newton_iterations", options.max_newton_iterations), count("max_rank", options.max_rank)})
+    if (!why.empty()) return "options: " + why;
+  const int method = static_cast<int>(options.method);
+  if (method < static_cast<int>(Method::automatic) || method > static_cast<int>(Method::null_space))
+    return printed("options: method = %d: not a Method", method);
   return {};
 }
 

@@ -92,11 +92,24 @@ struct Result {
   Eigen::MatrixXd X() const { return Y * Y.transpose(); }
 };
 
-// Solves the SDP. Never throws on bad input: returns Status::invalid_input with a reason.
+// Solves the SDP. Never throws on bad input (validate's checks of C, d and the options): returns
+// Status::invalid_input with a reason.
 Result solve(const Eigen::MatrixXd& C, int d, const Options& options = {});
 
-// Checks C and d; returns an empty string when they are usable, otherwise the reason.
+// C's usable range: max|C_ij| at most kLargestObjective/n² (so that the objective, the bound and
+// every multiplier stay finite: |⟨C, X⟩| ≤ ‖C‖_F·n ≤ n²·max|C_ij|) and, unless C = 0, at least
+// kSmallestEntry (below it the unscaled certificate Λ would be rounded to the subnormal grid,
+// coarser than psd_tol·‖C‖_F).
+constexpr double kLargestObjective = 1e300;
+constexpr double kSmallestEntry = 1e-290;
+
+// Checks C and d; returns an empty string when they are usable, otherwise the reason (the entry
+// and its value). Usable: d = 1 or 2, C square with N = n/d ≥ 2 blocks, finite, in the range
+// above, and symmetric up to 1e-9·max|C_ij| (solve averages C with Cᵀ).
 std::string validate(const Eigen::MatrixXd& C, int d);
+// Checks the options: tolerances finite and ≥ 0, iteration and rank limits ≥ 0, a Method value;
+// the reason names the field and its value.
+std::string validate(const Options& options);
 
 // The tight complex (U(1)) form in real terms: Q̃ = Q + Kᵀ Q K with K = blkdiag(J, …, J),
 // J the 90° rotation. Q is 2N×2N; so is the result.
