@@ -44,7 +44,9 @@ double mehrotra_centring(double mu_aff, double mu, int exponent) {
   return std::min(1.0, sigma);
 }
 
-// For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα.
+// For A_p = Σ e_α e_βᵀ over its entry pairs: tr(e_α e_βᵀ X e_γ e_δᵀ W) = X_βγ W_δα, X read as X_γβ
+// (symmetric): down a column as q runs, like W, rather than along a row, whose entries lie n apart
+// (random full rank N = 64 2 % faster; the same iterates).
 void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
                       Eigen::MatrixXd& M) {
   const int m = static_cast<int>(entries.size());
@@ -54,13 +56,13 @@ void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const 
       const auto [s, t] = entries[q];
       double value;
       if (u == v && s == t) {
-        value = X(u, s) * W(s, u);
+        value = X(s, u) * W(s, u);
       } else if (u == v) {  // A_q has (s,t) and (t,s)
-        value = X(u, s) * W(t, u) + X(u, t) * W(s, u);
+        value = X(s, u) * W(t, u) + X(t, u) * W(s, u);
       } else if (s == t) {  // A_p has (u,v) and (v,u)
-        value = X(v, s) * W(s, u) + X(u, s) * W(s, v);
+        value = X(s, v) * W(s, u) + X(s, u) * W(s, v);
       } else {
-        value = X(v, s) * W(t, u) + X(v, t) * W(s, u) + X(u, s) * W(t, v) + X(u, t) * W(s, v);
+        value = X(s, v) * W(t, u) + X(t, v) * W(s, u) + X(s, u) * W(t, v) + X(t, u) * W(s, v);
       }
       M(p, q) = M(q, p) = value;
     }
