@@ -71,13 +71,28 @@ void schur_complement(const Eigen::MatrixXd& X, const Eigen::MatrixXd& W, const 
 
 namespace {
 
-// A(P W) for P n × n: only the d × d diagonal blocks of P W are formed, O(n² d).
-void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, const std::vector<Entry>& entries,
-                        Eigen::VectorXd& out) {
-  for (std::size_t p = 0; p < entries.size(); ++p) {
-    const auto [u, v] = entries[p];
-    const double uv = P.row(u).dot(W.col(v));
-    out[p] = u == v ? uv : uv + P.row(v).dot(W.col(u));
+// A(P W) for P n × n and W = Z⁻¹ (symmetric): only the d × d diagonal blocks of P W are formed,
+// O(n² d), through (P W)_uv = Σ_k P_uk W_vk summed down the columns of P and W. (Along P's rows,
+// whose entries lie n apart, it took 24 µs at n = 128 against 11 µs this way: at n = 128 a row's
+// entries share cache sets, as in for_each_entry_below_diagonal.) sums (n × d) is scratch: column 0
+// gets (P W)_uu, column 1 (d = 2, even u) (P W)_{u,u+1} + (P W)_{u+1,u}.
+void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, const std::vector<Entry>& entries, int d,
+                        Eigen::MatrixXd& sums, Eigen::VectorXd& out) {
+  const Eigen::Index n = P.rows();
+  sums.setZero();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double* p = P.col(k).data();
+    const double* w = W.col(k).data();
+    double* diagonal = sums.col(0).data();
+    for (Eigen::Index u = 0; u < n; ++u) diagonal[u] += p[u] * w[u];
+    if (d == 2) {
+      double* mates = sums.col(1).data();
+      for (Eigen::Index u = 0; u + 1 < n; u += 2) mates[u] += p[u] * w[u + 1] + p[u + 1] * w[u];
+    }
+  }
+  for (std::size_t q = 0; q < entries.size(); ++q) {
+    const auto [u, v] = entries[q];
+    out[q] = u == v ? sums(u, 0) : sums(u, 1);
   }
 }
 
@@ -86,7 +101,8 @@ void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, cons
 struct Workspace {
   Workspace(int n, int m, int d)
       : Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
-        dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), rhs(m), dy_aff(m), dy(m), primal_steps(n), dual_steps(n) {}
+        dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), block_sums(n, d), rhs(m), dy_aff(m), dy(m), primal_steps(n),
+        dual_steps(n) {}
   Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n)
   SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
   Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
@@ -96,6 +112,7 @@ struct Workspace {
   Eigen::MatrixXd dx_aff, dx;                  // predictor / corrector primal directions (n × n)
   Eigen::MatrixXd PLt;                         // P Lz⁻ᵀ for the accurate primal direction (n × n)
   Eigen::MatrixXd dz_aff, dz;                  // dual directions ΔZ = −Aᵀ(Δy), diagonal blocks stacked (n × d)
+  Eigen::MatrixXd block_sums;                  // apply_A_to_product's scratch (n × d)
   Eigen::VectorXd rhs, dy_aff, dy;             // Schur right-hand side and dual directions (m)
   StepLength primal_steps, dual_steps;         // step lengths for X and Z; their last Cholesky tests
                                                // factor the next X and Z (take_tested)
@@ -241,7 +258,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
     // A(T) needs only T's diagonal blocks: A(σμW − X) − A((ΔX_a ΔZ_a) W).
     times_block_diagonal(ws.dx_aff, ws.dz_aff, d, ws.P);  // ΔX_a ΔZ_a
-    apply_A_to_product(ws.P, ws.W, entries, ws.rhs);
+    apply_A_to_product(ws.P, ws.W, entries, d, ws.block_sums, ws.rhs);
     for (int p = 0; p < m; ++p) {
       const auto [u, v] = entries[p];
       const double t_uv = sigma * mu * ws.W(u, v) - X(u, v);
