@@ -149,7 +149,8 @@ constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
 
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
 // triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize and its blocked one from it;
-// false when A is not positive definite or its lower triangle has a NaN or infinite entry.
+// false when A is not positive definite or its lower triangle has a NaN or infinite entry (of a
+// complex diagonal only the real part is read, as for any self-adjoint A).
 // Eigen::LLT::compute would also sum |a_ij| for a condition estimate that nothing here reads: for
 // complex entries a hypot per entry, 8 % of the complex interior point's time at N = 100
 // (BENCHMARKS.md, session 13).
@@ -157,7 +158,8 @@ template <class Matrix>
 bool cholesky_in_place(Matrix& A) {
   using Kernel = Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>;
   // Eigen tests its pivots by x <= 0, which a NaN passes, and an infinite pivot has an infinite
-  // root: a NaN or infinite entry of the lower triangle ends up on L's diagonal, checked here.
+  // root: a NaN or infinite entry read from the lower triangle ends up on L's diagonal (or, off
+  // the diagonal and infinite, makes a later pivot −∞), checked here.
   return (A.rows() < kBlockedCholeskyMinSize ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
          A.diagonal().real().allFinite();
 }

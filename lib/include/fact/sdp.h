@@ -54,7 +54,8 @@ struct Options {
   int max_sweeps = 10;       // block-coordinate sweeps after each staircase escape, before Newton
   int max_ipm_iterations = 80;
   int max_newton_iterations = 60;  // Riemannian Newton steps per staircase level (automatic mode: 25 at rank d)
-  int max_rank = 0;          // largest factor rank for the staircase; 0 = Pataki bound
+  int max_rank = 0;          // largest factor rank for the staircase; 0 = Pataki bound (negative:
+                             // invalid_input, since session 29; it used to mean 0)
   unsigned seed = 1;         // deterministic initialisation
 };
 
