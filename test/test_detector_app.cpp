@@ -10,6 +10,7 @@
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
+#include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
 
@@ -42,20 +43,7 @@ namespace {
 namespace fs = std::filesystem;
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-bool only_loopback() {
-  std::ifstream dev("/proc/net/dev");
-  std::string line;
-  int n = 0;
-  while (std::getline(dev, line)) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    name.erase(0, name.find_first_not_of(' '));
-    if (name != "lo") return false;
-    ++n;
-  }
-  return n == 1;
-}
+using fact::test::only_loopback;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p);
@@ -310,20 +298,4 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bool listing = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
-  if (!listing && !only_loopback()) {
-    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
-    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
-    std::vector<char*> argv2;
-    for (auto& w : words) argv2.push_back(w.data());
-    argv2.push_back(nullptr);
-    execv(FACT_NETNS_RUN, argv2.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
-    return 125;
-  }
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }

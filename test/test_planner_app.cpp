@@ -10,7 +10,6 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
-#include <net/if.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -44,6 +43,7 @@
 #include "fact/setpoint_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
 
@@ -58,15 +58,7 @@ using Eigen::Vector3d;
 const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
 constexpr double kPi = 3.14159265358979323846;
 
-bool only_loopback() {
-  struct if_nameindex* names = if_nameindex();
-  if (names == nullptr) return false;
-  bool only_lo = true;
-  for (struct if_nameindex* i = names; i->if_index != 0; ++i)
-    if (std::string(i->if_name) != "lo") only_lo = false;
-  if_freenameindex(names);
-  return only_lo;
-}
+using fact::test::only_loopback;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p);
@@ -518,20 +510,4 @@ TEST_F(PlannerApp, BadFlagsExit2) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bool listing = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
-  if (!listing && !only_loopback()) {
-    std::vector<char*> words = {const_cast<char*>(FACT_NETNS_RUN)};
-    std::string self = fs::read_symlink("/proc/self/exe").string();
-    words.push_back(self.data());
-    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
-    words.push_back(nullptr);
-    execv(FACT_NETNS_RUN, words.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
-    return 125;
-  }
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }

@@ -7,6 +7,7 @@
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, and
 // the URLs have ttl=0. Paths come from FACT_SIM_BINARY, FACT_NETNS_RUN.
 #include "common/app.h"
+#include "private_netns.h"
 #include "test_time.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
@@ -42,21 +43,7 @@ namespace {
 namespace fs = std::filesystem;
 constexpr int64_t kEpoch = 1700000000000000LL;
 
-bool only_loopback() {
-  std::ifstream dev("/proc/net/dev");
-  if (!dev) return false;
-  std::string line;
-  int interfaces = 0;
-  while (std::getline(dev, line)) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    name.erase(0, name.find_first_not_of(' '));
-    if (name != "lo") return false;
-    ++interfaces;
-  }
-  return interfaces == 1;
-}
+using fact::test::only_loopback;
 
 std::string url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 // The listener's URL: a 4 MB receive buffer (net.core.rmem_max permitting), since frames are
@@ -507,20 +494,4 @@ TEST(SimAppFlags, BadWorldFileAndFlagsExitTwoWithTheReason) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bool listing = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
-  if (!listing && !only_loopback()) {
-    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
-    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
-    std::vector<char*> argv2;
-    for (std::string& w : words) argv2.push_back(w.data());
-    argv2.push_back(nullptr);
-    execv(FACT_NETNS_RUN, argv2.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
-    return 125;
-  }
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }

@@ -14,6 +14,7 @@
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless only lo is visible. Paths come from
 // FACT_SIM_BINARY, FACT_FC_BRIDGE_BINARY, FACT_NETNS_RUN.
 #include "common/app.h"
+#include "private_netns.h"
 #include "test_time.h"
 #include "fact/fc_state_t.hpp"
 #include "fact/mavlink.h"
@@ -57,21 +58,7 @@ namespace mav = fact::mavlink;
 constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kEpoch = 1700000000000000LL;  // fact-sim's default --epoch-utime
 
-bool only_loopback() {
-  std::ifstream dev("/proc/net/dev");
-  if (!dev) return false;
-  std::string line;
-  int interfaces = 0;
-  while (std::getline(dev, line)) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    std::string name = line.substr(0, colon);
-    name.erase(0, name.find_first_not_of(' '));
-    if (name != "lo") return false;
-    ++interfaces;
-  }
-  return interfaces == 1;
-}
+using fact::test::only_loopback;
 
 std::string url(int port) { return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0"; }
 
@@ -709,20 +696,4 @@ TEST(SimFcFlags, BadFlagsExitTwoAndABusyPortExitsOne) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  bool listing = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
-  if (!listing && !only_loopback()) {
-    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
-    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
-    std::vector<char*> argv2;
-    for (std::string& w : words) argv2.push_back(w.data());
-    argv2.push_back(nullptr);
-    execv(FACT_NETNS_RUN, argv2.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
-    return 125;
-  }
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }

@@ -40,6 +40,7 @@
 #include "common/app.h"
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
+#include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
 
@@ -52,22 +53,7 @@ namespace fs = std::filesystem;
 constexpr double kPi = 3.14159265358979323846;
 const std::string kApp = "fact-vio-relay";
 
-// True when the current network namespace has no interface but lo.
-bool only_loopback() {
-  std::ifstream dev("/proc/net/dev");
-  if (!dev) return false;
-  std::string line;
-  int interfaces = 0;
-  while (std::getline(dev, line)) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;  // the two header lines
-    std::string name = line.substr(0, colon);
-    name.erase(0, name.find_first_not_of(' '));
-    if (name != "lo") return false;
-    ++interfaces;
-  }
-  return interfaces == 1;
-}
+using fact::test::only_loopback;
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -517,20 +503,4 @@ TEST_F(VioRelayTest, BadFlagsExitTwoWithTheReason) {
 }  // namespace
 
 // Runs the tests inside a private network namespace (see the top of this file).
-int main(int argc, char** argv) {
-  bool listing = false;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]).rfind("--gtest_list_tests", 0) == 0) listing = true;
-  if (!listing && !only_loopback()) {
-    std::vector<std::string> words = {FACT_NETNS_RUN, fs::read_symlink("/proc/self/exe").string()};
-    for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
-    std::vector<char*> argv2;
-    for (std::string& w : words) argv2.push_back(w.data());
-    argv2.push_back(nullptr);
-    execv(FACT_NETNS_RUN, argv2.data());
-    std::fprintf(stderr, "cannot run %s: %s\n", FACT_NETNS_RUN, std::strerror(errno));
-    return 125;
-  }
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }
