@@ -15,19 +15,15 @@
 #include <netinet/in.h>
 #include <pty.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -39,10 +35,9 @@
 #include "fact/mavlink.h"
 #include "fact/mavlink_frames.h"
 #include "fact/setpoint_t.hpp"
+#include "app_process.h"
 #include "private_netns.h"
 #include "test_time.h"
-
-extern char** environ;
 
 namespace {
 
@@ -52,65 +47,22 @@ constexpr double kPi = 3.14159265358979323846;
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 using fact::test::only_loopback;
+using fact::test::read_text;
 
 double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The bridge process, stderr to a file.
-class Process {
+// The bridge process, stdout and stderr in one temporary file (removed with it).
+class Process : private fact::test::TempFile, public fact::test::AppProcess {
  public:
-  explicit Process(const std::vector<std::string>& args) {
-    err_ = fs::temp_directory_path() / ("fc_bridge_test_" + std::to_string(::getpid()) + "_" + std::to_string(++count_) + ".err");
-    posix_spawn_file_actions_t a;
-    posix_spawn_file_actions_init(&a);
-    posix_spawn_file_actions_addopen(&a, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&a, 1, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&a, 2, err_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    std::vector<std::string> words = {FACT_FC_BRIDGE_BINARY};
-    words.insert(words.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, FACT_FC_BRIDGE_BINARY, &a, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&a);
-  }
-  ~Process() {
-    if (pid_ > 0 && !done_) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-    std::error_code ec;
-    fs::remove(err_, ec);
-  }
-  int wait() {
-    if (pid_ > 0 && !done_) {
-      int st = 0;
-      ::waitpid(pid_, &st, 0);
-      done_ = true;
-      code_ = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    }
-    return code_;
-  }
-  int stop() {
-    if (pid_ > 0 && !done_) ::kill(pid_, SIGINT);
-    return wait();
-  }
-  std::string log() const { return read_text(err_); }
-
- private:
-  static inline int count_ = 0;
-  fs::path err_;
-  pid_t pid_ = -1;
-  bool done_ = false;
-  int code_ = -1;
+  explicit Process(const std::vector<std::string>& args)
+      : TempFile("fc-bridge-test"),
+        AppProcess(fact::test::command_line(FACT_FC_BRIDGE_BINARY, args), TempFile::path(), TempFile::path()) {}
+  // The exit code once it exits (AppProcess::wait_for; −1 if it is still running after 20 s).
+  int wait() { return wait_s(20); }
+  int stop() { return AppProcess::stop(SIGINT); }
+  std::string log() const { return err(); }
 };
 
 int run_to_exit(const std::vector<std::string>& args, std::string* log) {

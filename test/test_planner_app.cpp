@@ -9,10 +9,7 @@
 // swarm_rounds_t and swarm_result_t are published when the planner says it waits for them.
 #include <gtest/gtest.h>
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
@@ -25,12 +22,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
-#include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "common/app.h"
@@ -43,11 +37,10 @@
 #include "fact/setpoint_t.hpp"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "app_process.h"
 #include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
-
-extern char** environ;
 
 namespace {
 
@@ -59,68 +52,10 @@ const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
 constexpr double kPi = 3.14159265358979323846;
 
 using fact::test::only_loopback;
+using fact::test::read_text;
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A child process (stdin /dev/null, stderr to a file); SIGTERM then SIGKILL when destroyed.
-class Process {
- public:
-  Process(std::vector<std::string> words, const fs::path& err) : err_(err) {
-    posix_spawn_file_actions_t a;
-    posix_spawn_file_actions_init(&a);
-    posix_spawn_file_actions_addopen(&a, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&a, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&a, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, words[0].c_str(), &a, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&a);
-  }
-  ~Process() {
-    if (running()) {
-      kill(pid_, SIGTERM);
-      if (wait_for(std::chrono::seconds(3)) == -2) {
-        kill(pid_, SIGKILL);
-        wait_for(std::chrono::seconds(3));
-      }
-    }
-  }
-  bool started() const { return pid_ > 0; }
-  bool running() {
-    if (pid_ <= 0 || done_) return false;
-    int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == 0) return true;
-    done_ = true;
-    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return false;
-  }
-  // The exit code, −1 if killed by a signal, −2 if still running after `limit` × FACT_TEST_TIME_SCALE.
-  int wait_for(Clock::duration limit) {
-    const auto end = Clock::now() + fact::test::scaled(limit);
-    while (running()) {
-      if (Clock::now() >= end) return -2;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return code_;
-  }
-  int stop() {
-    if (running()) kill(pid_, SIGTERM);
-    return wait_for(std::chrono::seconds(5));
-  }
-  std::string err() const { return read_text(err_); }
-
- private:
-  pid_t pid_ = -1;
-  bool done_ = false;
-  int code_ = -2;
-  fs::path err_;
-};
+// A child process with stderr in a file (app_process.h).
+using Process = fact::test::AppProcess;
 
 int64_t wall_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -339,7 +274,7 @@ class PlannerApp : public fact::test::TempDirTest {
                                   "--seed", "7", "--spin-rate", "6", "--yaw-accel", "20", "--v-max", "2", "--a-max",
                                   "6", "--random-move-probability", "0"};
     w.insert(w.end(), extra.begin(), extra.end());
-    process_ = std::make_unique<Process>(w, dir_ / "planner.err");
+    process_ = std::make_unique<Process>(w, "/dev/null", dir_ / "planner.err");
     EXPECT_TRUE(process_->started());
     return *process_;
   }
@@ -494,16 +429,17 @@ TEST_F(PlannerApp, WaitTimeoutMovesTowardFarthestObserved) {
 
 TEST_F(PlannerApp, BadFlagsExit2) {
   {
-    Process p({FACT_PLANNER_BINARY, "--lcm-url", kUrl}, dir_ / "a.err");
+    Process p({FACT_PLANNER_BINARY, "--lcm-url", kUrl}, "/dev/null", dir_ / "a.err");
     EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
   }
   {
-    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--setpoint-rate", "10"}, dir_ / "b.err");
+    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--setpoint-rate", "10"}, "/dev/null", dir_ / "b.err");
     EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
     EXPECT_NE(p.err().find("--setpoint-rate"), std::string::npos);
   }
   {
-    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--takeoff-min", "2", "--takeoff-max", "1"}, dir_ / "c.err");
+    Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--takeoff-min", "2", "--takeoff-max", "1"}, "/dev/null",
+              dir_ / "c.err");
     EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
   }
 }

@@ -6,6 +6,7 @@
 // udpm must never leave the machine: main() re-executes this program through
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless it already sees no network interface but lo, and
 // the URLs have ttl=0. Paths come from FACT_SIM_BINARY, FACT_NETNS_RUN.
+#include "app_process.h"
 #include "common/app.h"
 #include "private_netns.h"
 #include "test_time.h"
@@ -19,24 +20,16 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
-
-extern char** environ;
 
 namespace {
 
@@ -50,67 +43,14 @@ std::string url(int port) { return "udpm://239.255.76.67:" + std::to_string(port
 // 300 kB each and arrive in bursts at --rate 0.
 std::string listen_url(int port) { return url(port) + "&recv_buf_size=4194304"; }
 
-// fact-sim with the given flags, stderr to a file.
-class SimProcess {
+// fact-sim as a child process, stderr in a temporary file (removed with it), stdout discarded.
+class SimProcess : private fact::test::TempFile, public fact::test::AppProcess {
  public:
-  explicit SimProcess(const std::vector<std::string>& flags) {
-    char tmpl[] = "/tmp/fact-sim-test-XXXXXX";
-    int fd = mkstemp(tmpl);
-    err_path_ = tmpl;
-    std::vector<std::string> words = {FACT_SIM_BINARY};
-    words.insert(words.end(), flags.begin(), flags.end());
-    std::vector<char*> argv;
-    for (auto& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fd, 2);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    started_ = posix_spawn(&pid_, FACT_SIM_BINARY, &fa, nullptr, argv.data(), environ) == 0;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fd);
-  }
-  ~SimProcess() {
-    if (pid_ > 0 && !reaped_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    fs::remove(err_path_);
-  }
-  bool started() const { return started_; }
-  // Exit code, or -1 after timeout_s × FACT_TEST_TIME_SCALE.
-  int wait(double timeout_s = 20) {
-    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::duration<double>(timeout_s));
-    while (std::chrono::steady_clock::now() < end) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        reaped_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      usleep(10000);
-    }
-    return -1;
-  }
-  bool running() {
-    int status = 0;
-    if (reaped_) return false;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) {
-      reaped_ = true;
-      return false;
-    }
-    return true;
-  }
-  std::string err() const {
-    std::ifstream in(err_path_);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool started_ = false, reaped_ = false;
-  std::string err_path_;
+  explicit SimProcess(const std::vector<std::string>& flags)
+      : TempFile("fact-sim-test"),
+        AppProcess(fact::test::command_line(FACT_SIM_BINARY, flags), "/dev/null", TempFile::path()) {}
+  // The exit code once it exits (AppProcess::wait_for; −1 if it is still running after timeout_s).
+  int wait(double timeout_s = 20) { return wait_s(timeout_s); }
 };
 
 // Everything fact-sim publishes, collected per channel.

@@ -13,6 +13,7 @@
 // udpm must never leave the machine: main() re-executes this program through
 // scripts/netns-run.sh (FACT_NETNS_RUN) unless only lo is visible. Paths come from
 // FACT_SIM_BINARY, FACT_FC_BRIDGE_BINARY, FACT_NETNS_RUN.
+#include "app_process.h"
 #include "common/app.h"
 #include "private_netns.h"
 #include "test_time.h"
@@ -28,12 +29,9 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <netinet/in.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,14 +40,10 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <vector>
-
-extern char** environ;
 
 namespace {
 
@@ -82,67 +76,15 @@ std::string write_world() {
   return tmpl;
 }
 
-// A child process (fact-sim or fact-fc-bridge), stderr to a file.
-class Process {
+// A child process, stderr in a temporary file (removed with it), stdout discarded.
+class Process : private fact::test::TempFile, public fact::test::AppProcess {
  public:
-  Process(const std::string& binary, const std::vector<std::string>& args) {
-    char tmpl[] = "/tmp/fact-simfc-test-XXXXXX";
-    const int fd = mkstemp(tmpl);
-    err_path_ = tmpl;
-    std::vector<std::string> words = {binary};
-    words.insert(words.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fd, 2);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    started_ = posix_spawn(&pid_, binary.c_str(), &fa, nullptr, argv.data(), environ) == 0;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fd);
-  }
-  ~Process() {
-    if (pid_ > 0 && !reaped_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    std::error_code ec;
-    fs::remove(err_path_, ec);
-  }
-  bool started() const { return started_; }
-  // Exit code, or -1 after timeout_s × FACT_TEST_TIME_SCALE (then killed).
-  int wait(double timeout_s = 10) {
-    const double end = deadline_s(timeout_s);
-    while (wall_s() < end) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        reaped_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      usleep(5000);
-    }
-    kill(pid_, SIGKILL);
-    waitpid(pid_, nullptr, 0);
-    reaped_ = true;
-    return -1;
-  }
-  int stop() {
-    if (pid_ > 0 && !reaped_) kill(pid_, SIGINT);
-    return wait();
-  }
-  std::string err() const {
-    std::ifstream in(err_path_);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool started_ = false, reaped_ = false;
-  std::string err_path_;
+  Process(const std::string& binary, const std::vector<std::string>& args)
+      : TempFile("fact-simfc-test"),
+        AppProcess(fact::test::command_line(binary, args), "/dev/null", TempFile::path()) {}
+  // The exit code once it exits (AppProcess::wait_for; −1 if it is still running after timeout_s).
+  int wait(double timeout_s = 10) { return wait_s(timeout_s); }
+  int stop() { return AppProcess::stop(SIGINT, std::chrono::seconds(10)); }
 };
 
 // LCM side: the simulation clock, ground truth, fc_state, both apps' status; relays the sim's raw

@@ -9,10 +9,6 @@
 // The binaries' paths come from compile definitions (FACT_SOLVER_BINARY, …).
 #include <gtest/gtest.h>
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -25,9 +21,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
-#include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
@@ -41,11 +35,10 @@
 #include "fact/simgen.h"
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
+#include "app_process.h"
 #include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
-
-extern char** environ;
 
 namespace {
 
@@ -54,80 +47,11 @@ using Clock = std::chrono::steady_clock;
 
 const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 using fact::test::only_loopback;
+using fact::test::read_text;
 
-// A child process with stdout and stderr in files; terminated (SIGTERM, then SIGKILL) when
-// destroyed if still running.
-class Process {
- public:
-  Process(const std::vector<std::string>& words, const fs::path& out, const fs::path& err) : err_(err) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> copy = words;
-    std::vector<char*> argv;
-    for (std::string& w : copy) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, copy[0].c_str(), &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  Process(const Process&) = delete;
-  Process& operator=(const Process&) = delete;
-  ~Process() {
-    if (running()) {
-      kill(pid_, SIGTERM);
-      if (wait_for(std::chrono::seconds(3)) < -1) {
-        kill(pid_, SIGKILL);
-        wait_for(std::chrono::seconds(3));
-      }
-    }
-  }
-
-  bool started() const { return pid_ > 0; }
-  bool running() {
-    if (pid_ <= 0 || done_) return false;
-    int status = 0;
-    const pid_t r = waitpid(pid_, &status, WNOHANG);
-    if (r == 0) return true;
-    finish(status);
-    return false;
-  }
-  // Waits up to `limit` × FACT_TEST_TIME_SCALE for the process to exit: its exit code, −1 if
-  // killed by a signal, −2 if still running.
-  int wait_for(Clock::duration limit) {
-    const auto end = Clock::now() + fact::test::scaled(limit);
-    while (running()) {
-      if (Clock::now() >= end) return -2;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    return code_;
-  }
-  // SIGTERM, then the exit code (as wait_for).
-  int stop() {
-    if (running()) kill(pid_, SIGTERM);
-    return wait_for(std::chrono::seconds(5));
-  }
-  std::string err() const { return read_file(err_); }
-
- private:
-  void finish(int status) {
-    done_ = true;
-    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  pid_t pid_ = -1;
-  bool done_ = false;
-  int code_ = -2;
-  fs::path err_;
-};
+// A child process with stdout and stderr in files (app_process.h).
+using Process = fact::test::AppProcess;
 
 // The test's own LCM endpoint: keeps every message received on the channels it listens to.
 class Listener {
@@ -301,7 +225,7 @@ TEST(SolverAppCli, HelpExitsZeroAndListsTheFlags) {
     {
       Process p({binary, "--help"}, out, err);
       code = p.wait_for(std::chrono::seconds(10));
-      text = read_file(out);
+      text = read_text(out);
     }
     EXPECT_EQ(code, 0) << binary;
     for (const char* flag : {"--lcm-url", "--drone-id"}) EXPECT_NE(text.find(flag), std::string::npos) << binary << ": " << flag;
@@ -320,7 +244,7 @@ TEST_F(SolverApp, BadFlagsExitTwoNamingTheFlag) {
     words.insert(words.end(), args.begin(), args.end());
     const std::string name = "bad" + std::to_string(i++);
     EXPECT_EQ(run(name, words), 2) << args[0] << " " << args[1];
-    EXPECT_NE(read_file(file(name + ".err")).find(args[0]), std::string::npos) << read_file(file(name + ".err"));
+    EXPECT_NE(read_text(file(name + ".err")).find(args[0]), std::string::npos) << read_text(file(name + ".err"));
   }
   const std::string good = write_rounds(scenario_rounds());
   std::ofstream(file("broken.json")) << "{\"format\": \"fact-rounds-v1\", \"drones\": [1, 2], ";
@@ -335,13 +259,13 @@ TEST_F(SolverApp, BadFlagsExitTwoNamingTheFlag) {
     words.insert(words.end(), args.begin(), args.end());
     const std::string name = "bad" + std::to_string(i++);
     EXPECT_EQ(run(name, words), 2) << args[0] << " " << args[1] << " " << args.back();
-    EXPECT_NE(read_file(file(name + ".err")).find("error"), std::string::npos);
+    EXPECT_NE(read_text(file(name + ".err")).find("error"), std::string::npos);
   }
 }
 
 TEST_F(SolverApp, UnusableLcmUrlExitsOne) {
   EXPECT_EQ(run("badurl", {FACT_SOLVER_BINARY, "--lcm-url", "nosuchprovider://x"}), 1);
-  EXPECT_NE(read_file(file("badurl.err")).find("cannot open LCM"), std::string::npos) << read_file(file("badurl.err"));
+  EXPECT_NE(read_text(file("badurl.err")).find("cannot open LCM"), std::string::npos) << read_text(file("badurl.err"));
 }
 
 // Two solvers (drones 1 and 2) fed the same rounds by fact-rounds-publish publish the same result,
@@ -364,7 +288,7 @@ TEST_F(SolverApp, TwoDronesPublishTheInProcessEstimateBitForBit) {
       << s1.err() << s2.err();
 
   // What fact-solver must have computed: the file, decoded as the publisher did, estimated here.
-  const fact::Rounds rounds = fact::rounds_from_json(read_file(rounds_file));
+  const fact::Rounds rounds = fact::rounds_from_json(read_text(rounds_file));
   const fact::Estimate expected = fact::estimate_poses(rounds, fact::EstimateOptions{});
   ASSERT_TRUE(expected.certified()) << expected.reason;
 
@@ -418,7 +342,7 @@ TEST_F(SolverApp, EstimatesAgainWheneverARoundCompletes) {
   ASSERT_TRUE(l.until([&] { return l.raw("FACT_RESULT_4").size() >= 3; })) << s.err();
   const auto results = l.results("FACT_RESULT_4");
   ASSERT_EQ(results.size(), 3u);
-  const fact::Rounds rounds = fact::rounds_from_json(read_file(rounds_file));
+  const fact::Rounds rounds = fact::rounds_from_json(read_text(rounds_file));
   fact::EstimateOptions options;
   options.mode = fact::Mode::complex;
   for (int k = 1; k <= 3; ++k) {

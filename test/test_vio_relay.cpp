@@ -13,12 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <netinet/in.h>
-#include <signal.h>
-#include <spawn.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -26,10 +22,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <memory>
-#include <sstream>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,11 +34,10 @@
 #include "common/app.h"
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
+#include "app_process.h"
 #include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
-
-extern char** environ;
 
 namespace {
 
@@ -54,13 +47,7 @@ constexpr double kPi = 3.14159265358979323846;
 const std::string kApp = "fact-vio-relay";
 
 using fact::test::only_loopback;
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using fact::test::read_text;
 
 int count_of(const std::string& text, const std::string& what) {
   int n = 0;
@@ -68,65 +55,14 @@ int count_of(const std::string& text, const std::string& what) {
   return n;
 }
 
-// fact-vio-relay as a child process, stdout and stderr in files; killed when destroyed if still running.
-class Relay {
+// fact-vio-relay as a child process, stdout and stderr in <dir>/<name>.out and .err.
+class Relay : public fact::test::AppProcess {
  public:
   Relay(const std::vector<std::string>& args, const fs::path& dir, const std::string& name)
-      : out_(dir / (name + ".out")), err_(dir / (name + ".err")) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> words = {FACT_VIO_RELAY_BINARY};
-    words.insert(words.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& w : words) argv.push_back(w.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, FACT_VIO_RELAY_BINARY, &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Relay() {
-    if (running()) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  Relay(const Relay&) = delete;
-  Relay& operator=(const Relay&) = delete;
-
-  bool started() const { return pid_ > 0; }
-  // Still running? Reaps it (and records its exit code) when it has exited.
-  bool running() {
-    if (pid_ <= 0 || done_) return false;
-    int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) finish(status);
-    return !done_;
-  }
-  // Waits for the exit; the exit code, or −1 when killed by a signal.
-  int wait() {
-    if (pid_ > 0 && !done_) {
-      int status = 0;
-      if (waitpid(pid_, &status, 0) == pid_) finish(status);
-    }
-    return code_;
-  }
-  int stop() {  // SIGTERM, then the exit code
-    if (running()) kill(pid_, SIGTERM);
-    return wait();
-  }
-  std::string out() const { return read_text(out_); }
-  std::string err() const { return read_text(err_); }
-
- private:
-  void finish(int status) {
-    done_ = true;
-    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  fs::path out_, err_;
-  pid_t pid_ = -1;
-  bool done_ = false;
-  int code_ = -1;
+      : AppProcess(fact::test::command_line(FACT_VIO_RELAY_BINARY, args), dir / (name + ".out"),
+                   dir / (name + ".err")) {}
+  // The exit code once it exits (AppProcess::wait_for; −1 if it is still running after 20 s).
+  int wait() { return wait_s(20); }
 };
 
 // What this process hears on LCM: the relay's odometry and status messages.
