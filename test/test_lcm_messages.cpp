@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -321,6 +322,14 @@ TEST(AppStatus, PublishesCountersAsAppStatus) {
   heartbeat.tick(t0 + 1000050);  // 50 µs: no
   heartbeat.tick(t0 + 1000100);  // 100 µs: yes
   EXPECT_EQ(heartbeat.published(), 3);
+  // The wall clock set back an hour: the heartbeat goes on from there instead of waiting an hour
+  // for the clock to catch up (review, session 30).
+  heartbeat.tick(t0 - 3600000000);
+  EXPECT_EQ(heartbeat.published(), 4);
+  heartbeat.tick(t0 - 3600000000 + 50);  // and keeps its period on the new time
+  EXPECT_EQ(heartbeat.published(), 4);
+  heartbeat.tick(t0 - 3600000000 + 100);
+  EXPECT_EQ(heartbeat.published(), 5);
 }
 
 TEST(AppCommon, ChannelNames) {
@@ -346,6 +355,18 @@ TEST(AppCommon, NowIsMicrosecondsSinceEpoch) {
   int64_t t = app::now_us();
   EXPECT_GT(t, int64_t{1600000000} * 1000000);  // after 2020
   EXPECT_LT(t, int64_t{4100000000} * 1000000);  // before 2100
+}
+
+// The schedules' clock is the steady clock (the wall clock's steps do not move it), in µs.
+TEST(AppCommon, MonotonicClockIsTheSteadyClock) {
+  using std::chrono::duration_cast;
+  using std::chrono::microseconds;
+  using std::chrono::steady_clock;
+  const int64_t steady = duration_cast<microseconds>(steady_clock::now().time_since_epoch()).count();
+  const int64_t t = app::monotonic_us();
+  EXPECT_GE(t, steady);
+  EXPECT_LT(t - steady, 100000);
+  EXPECT_GE(app::monotonic_us(), t);
 }
 
 TEST(AppCommon, RunLoopHandlesMessagesAndStops) {

@@ -35,6 +35,12 @@ int64_t now_us() {
   return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
 }
 
+int64_t monotonic_us() {
+  if (g_sim_clock.load()) return g_sim_now.load();
+  using namespace std::chrono;
+  return duration_cast<microseconds>(steady_clock::now().time_since_epoch()).count();
+}
+
 void follow_sim_clock(lcm::LCM& lcm, const std::string& channel) {
   lcm.subscribeFunction(channel, &on_sim_clock, static_cast<void*>(nullptr));
   g_sim_clock = true;
@@ -122,7 +128,9 @@ void Status::note(const std::string& message) { message_ = message; }
 void Status::set_period_us(int64_t period_us) { period_us_ = period_us > 0 ? period_us : 1; }
 
 void Status::tick(int64_t now) {
-  if (!ever_published_ || now - last_publish_ >= period_us_) publish(now);
+  // (now before the last publication: the wall clock was set back; publishing again re-bases the
+  // period instead of going quiet until the clock catches up)
+  if (!ever_published_ || now - last_publish_ >= period_us_ || now < last_publish_) publish(now);
 }
 
 void Status::publish(int64_t now) {

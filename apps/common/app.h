@@ -30,6 +30,12 @@ namespace fact::app {
 // Unix epoch, or, after follow_sim_clock(), the simulator's clock.
 int64_t now_us();
 
+// A clock for timeouts and schedules, µs: the simulation clock after follow_sim_clock(), else the
+// steady clock (from an arbitrary start), which a wall-clock step (NTP or GPS time set on the
+// drone) does not move. Message and log stamps keep now_us() (a step back of 1 h froze
+// fact-fc-bridge's stream rules on the wall clock: review, session 30).
+int64_t monotonic_us();
+
 // Switches now_us() to the simulation clock: fact::sim_clock_t ticks on `channel` (from fact-sim).
 // now_us() then returns the newest simulated time received (it never goes back; 0 before the
 // first tick). Undecodable ticks are ignored. Call once, before the app's loop.

@@ -36,6 +36,13 @@ void check_positive(const char* flag, double value) {
   throw FlagError(s.str());
 }
 
+void check_range(const char* flag, double value, double lo, double hi, const char* unit) {
+  if (value >= lo && value <= hi) return;  // (false for NaN)
+  std::ostringstream s;
+  s << flag << ": expected a number in [" << lo << ", " << hi << "] " << unit << ", got " << value;
+  throw FlagError(s.str());
+}
+
 void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id) {
   (void)drone_id;
   if (f.drone_id < 0)

@@ -38,6 +38,8 @@ void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id);
 
 // Throws FlagError("<flag>: expected a finite number > 0, got <value>") unless value is.
 void check_positive(const char* flag, double value);
+// Throws FlagError("<flag>: expected a number in [lo, hi] <unit>, got <value>") unless value is.
+void check_range(const char* flag, double value, double lo, double hi, const char* unit);
 
 // Parses the command line into cli, then runs check (which throws FlagError for an unusable
 // value). Returns -1 when the app should go on, else the code to exit with: 0 after --help, 2 after
