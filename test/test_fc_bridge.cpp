@@ -267,8 +267,10 @@ TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
   ASSERT_TRUE(bridge_up(side)) << bridge.log();
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<fact::setpoint_t> bad = {setpoint(nan, 0, 1), setpoint(0, 0, 1, nan), setpoint(11, 0, 1),
-                                       setpoint(0, 0, 6), setpoint(0, -20, 1), setpoint(0, 0, -0.5)};
+                                       setpoint(0, 0, 6), setpoint(0, -20, 1), setpoint(0, 0, -0.5),
+                                       setpoint(0, 0, 1)};
   bad[1].velocity[2] = inf;
+  bad[6].velocity[1] = 1e39;  // finite as a double, ±inf as MAVLink's float (review, session 30)
   fact::setpoint_t foreign = setpoint(1, 1, 1);
   foreign.drone_id = 4;
   int step = 0;
@@ -308,12 +310,14 @@ TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
   ASSERT_TRUE(side.have_status);
   EXPECT_EQ(side.status.state, "stopped");
   EXPECT_GE(side.counter("rejected_nan"), 5);
+  EXPECT_GE(side.counter("rejected_range"), 1);
   EXPECT_GE(side.counter("rejected_geofence"), 7);
   EXPECT_GE(side.counter("rejected_drone_id"), 15);
   EXPECT_GE(side.counter("undecodable"), 15);
   const std::string log = bridge.log();
   EXPECT_NE(log.find("rejected: setpoint position[0] = nan is not finite"), std::string::npos) << log;
   EXPECT_NE(log.find("rejected: setpoint velocity[2] = inf is not finite"), std::string::npos) << log;
+  EXPECT_NE(log.find("rejected: setpoint velocity[1] = 1e+39 is beyond ±1e+06"), std::string::npos) << log;
   EXPECT_NE(log.find("rejected: setpoint position[2] = 6 m outside the geofence z [0, 5] m"), std::string::npos) << log;
   EXPECT_NE(log.find("rejected: setpoint drone_id = 4"), std::string::npos) << log;
 }
@@ -339,6 +343,10 @@ TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
   pos.x = 2; pos.y = 1; pos.z = -3; pos.vx = 0.5; pos.vy = -0.5; pos.vz = 0.25;
   mav::Attitude att;
   att.roll = 0.1f; att.pitch = 0.2f; att.yaw = 0;
+  mav::LocalPositionNed nan_pos = pos;  // sent after the valid one: it must not replace it
+  nan_pos.y = std::numeric_limits<float>::quiet_NaN();
+  FakeFc stranger(15129, 15120);  // the FC's address, another port: its heartbeats are ignored
+  ASSERT_TRUE(stranger.ok());
   double next = 0, next_sp = 0;
   run_for(1.5, fc, side, [&](double t) {
     if (t >= next_sp) publish_sp(side, setpoint(0, 0, 1)), next_sp = t + 0.05;
@@ -347,6 +355,8 @@ TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
     fc.heartbeat(mav::kModeFlagCustomModeEnabled | mav::kModeFlagSafetyArmed, mav::kPx4MainModeOffboard << 16);
     fc.send(pos);
     fc.send(att);
+    fc.send(nan_pos);
+    stranger.heartbeat();
     for (const std::vector<uint8_t>* b : {&bad_crc, &unknown, &too_long, &signed_frame}) fc.send_bytes(*b);
   });
   EXPECT_EQ(bridge.stop(), 0);
@@ -357,7 +367,10 @@ TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
   EXPECT_GE(side.counter("mavlink_unknown_id"), 10);
   EXPECT_GE(side.counter("mavlink_bad_length"), 10);
   EXPECT_GE(side.counter("mavlink_signed_frame"), 10);
+  EXPECT_GE(side.counter("mavlink_non_finite"), 10);
+  EXPECT_GE(side.counter("foreign_datagrams"), 10);
   EXPECT_GE(side.counter("fc_heartbeats"), 10);
+  EXPECT_LE(side.counter("fc_heartbeats"), 20) << "the stranger's heartbeats were counted";
   EXPECT_GE(side.counter("setpoints_sent"), 40);
   EXPECT_EQ(side.counter("commands_sent"), 0) << "the FC already reports armed + offboard";
   EXPECT_EQ(fc.count(76), 0);
@@ -382,6 +395,10 @@ TEST(FcBridge, MalformedMavlinkCountedAndFcStateConvertedBack) {
   EXPECT_NE(log.find("unknown msgid 1"), std::string::npos) << log;
   EXPECT_NE(log.find("payload 20 bytes, at most 9"), std::string::npos) << log;
   EXPECT_NE(log.find("signing is not supported"), std::string::npos) << log;
+  EXPECT_NE(log.find("LOCAL_POSITION_NED y = nan is not finite"), std::string::npos) << log;
+  EXPECT_NE(log.find("ignored a 21-byte datagram from 127.0.0.1:15129, not the flight controller 127.0.0.1:15121"),
+            std::string::npos)
+      << log;
 }
 
 TEST(FcBridge, SerialLinkOnAPseudoTerminal) {
@@ -424,6 +441,16 @@ TEST(FcBridge, FlagsAndLinkErrors) {
   EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--stream-rate", "2"}, &log), 2);
   EXPECT_NE(log.find("more than 2 Hz"), std::string::npos) << log;
   EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--sysid", "0"}, &log), 2);
+  // Timeouts that round to 0 µs or never expire, a state rate that spins the loop, a fence beyond
+  // a float's range (review, session 30: all were accepted).
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--setpoint-timeout", "1e-9"}, &log), 2);
+  EXPECT_NE(log.find("--setpoint-timeout: expected a number in [0.01, 60] s, got 1e-09"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--heartbeat-timeout", "1e13"}, &log), 2);
+  EXPECT_NE(log.find("--heartbeat-timeout: expected a number in [0.01, 60] s, got 1e+13"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--state-rate", "1e7"}, &log), 2);
+  EXPECT_NE(log.find("--state-rate: expected a number in [0.01, 100] Hz, got 1e+07"), std::string::npos) << log;
+  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--geofence", "-1e39,1,-1,1,0,1"}, &log), 2);
+  EXPECT_NE(log.find("--geofence: '-1e39' in '-1e39,1,-1,1,0,1' is beyond ±1e+06 m"), std::string::npos) << log;
   EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/nonexistent/ttyFACT"}, &log), 1);
   EXPECT_NE(log.find("cannot open serial device '/nonexistent/ttyFACT'"), std::string::npos) << log;
   EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/dev/null"}, &log), 1);

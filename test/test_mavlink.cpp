@@ -379,6 +379,43 @@ TEST(MavlinkParser, SignedFrameIsRejected) {
   EXPECT_EQ(c.frames[0].seq, 1);
 }
 
+// A start byte in garbage whose header reads as an unknown id cannot be verified; were it skipped
+// for the length it claims (here 60 bytes), it would swallow the heartbeats behind it (review,
+// session 30: 0 of 4 parsed).
+TEST(MavlinkParser, FalseStartWithAnUnknownIdDoesNotSwallowTheFramesBehindIt) {
+  std::vector<uint8_t> stream = {0x11, 0x22, mav::kStx, 60, 0, 0, 0, 1, 1, 124, 0, 0};  // msgid 124: unknown here
+  mav::Encoder enc({1, 1});
+  for (int i = 0; i < 4; ++i) {
+    const auto hb = enc.encode(mav::Heartbeat{});
+    stream.insert(stream.end(), hb.begin(), hb.end());
+  }
+  const std::size_t claimed_end = 2 + 10 + 60 + 2;  // the false start's header, payload and CRC
+  ASSERT_LT(claimed_end, stream.size());
+  ASSERT_NE(stream[claimed_end], mav::kStx);  // (so the claimed frame is not followed by a start byte)
+  mav::Parser p;
+  auto c = parse(p, stream);
+  ASSERT_EQ(c.frames.size(), 4u);
+  for (std::size_t i = 0; i < c.frames.size(); ++i) EXPECT_EQ(c.frames[i].seq, i);
+  ASSERT_GE(c.rejections.size(), 1u);
+  EXPECT_EQ(c.rejections[0].reason, mav::Reject::unknown_id);
+}
+
+// One bit flipped in a frame's incompat byte makes it "signed": 13 more bytes, into the next frame.
+TEST(MavlinkParser, FlippedSigningFlagDoesNotSwallowTheNextFrame) {
+  mav::Encoder enc({1, 1});
+  auto stream = enc.encode(mav::Heartbeat{});
+  stream[2] = mav::kIncompatSigned;
+  for (const auto& next : {enc.encode(sample_setpoint()), enc.encode(mav::Heartbeat{})})
+    stream.insert(stream.end(), next.begin(), next.end());
+  mav::Parser p;
+  auto c = parse(p, stream);
+  ASSERT_EQ(c.frames.size(), 2u);
+  EXPECT_EQ(c.frames[0].msgid, mav::SetPositionTargetLocalNed::kId);
+  EXPECT_EQ(c.frames[1].msgid, 0u);
+  ASSERT_GE(c.rejections.size(), 1u);
+  EXPECT_EQ(c.rejections[0].reason, mav::Reject::signed_frame);
+}
+
 TEST(MavlinkParser, UnknownIncompatFlagIsRejected) {
   mav::Encoder enc({1, 1});
   auto f = enc.encode(mav::Heartbeat{});

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace fact::bridge {
 
@@ -23,26 +24,55 @@ std::string num(double v) {
   return s.str();
 }
 
-// The name of the first non-finite field of a setpoint ("" when all are finite).
-std::string non_finite_field(const fact::setpoint_t& sp) {
-  for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(sp.position[i])) return "position[" + std::to_string(i) + "] = " + num(sp.position[i]);
-    if (!std::isfinite(sp.velocity[i])) return "velocity[" + std::to_string(i) + "] = " + num(sp.velocity[i]);
-    if (!std::isfinite(sp.acceleration[i])) return "acceleration[" + std::to_string(i) + "] = " + num(sp.acceleration[i]);
+// "" when v is finite and within ±kLargestValue; otherwise "<name> = <v> is not finite" (counter
+// rejected_nan) or "... is beyond ±1e+06" (rejected_range).
+std::string check_value(const std::string& name, double v, std::string* counter) {
+  if (!std::isfinite(v)) {
+    *counter = "rejected_nan";
+    return name + " = " + num(v) + " is not finite";
   }
-  if (!std::isfinite(sp.yaw)) return "yaw = " + num(sp.yaw);
-  if (!std::isfinite(sp.yaw_rate)) return "yaw_rate = " + num(sp.yaw_rate);
+  if (std::abs(v) > kLargestValue) {
+    *counter = "rejected_range";
+    return name + " = " + num(v) + " is beyond ±" + num(kLargestValue);
+  }
   return "";
 }
 
-std::string non_finite_field(const fact::odometry_t& od) {
+// The first bad field of a setpoint ("" when all are good), as check_value.
+std::string bad_field(const fact::setpoint_t& sp, std::string* counter) {
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(od.position[i])) return "position[" + std::to_string(i) + "] = " + num(od.position[i]);
-    if (!std::isfinite(od.velocity[i])) return "velocity[" + std::to_string(i) + "] = " + num(od.velocity[i]);
+    const std::string at = "[" + std::to_string(i) + "]";
+    for (const auto& [name, v] : {std::pair<std::string, double>{"position" + at, sp.position[i]},
+                                  {"velocity" + at, sp.velocity[i]}, {"acceleration" + at, sp.acceleration[i]}})
+      if (std::string why = check_value(name, v, counter); !why.empty()) return why;
   }
-  if (!std::isfinite(od.yaw)) return "yaw = " + num(od.yaw);
-  if (!std::isfinite(od.roll)) return "roll = " + num(od.roll);
-  if (!std::isfinite(od.pitch)) return "pitch = " + num(od.pitch);
+  if (std::string why = check_value("yaw", sp.yaw, counter); !why.empty()) return why;
+  return check_value("yaw_rate", sp.yaw_rate, counter);
+}
+
+std::string bad_field(const fact::odometry_t& od, std::string* counter) {
+  for (int i = 0; i < 3; ++i) {
+    const std::string at = "[" + std::to_string(i) + "]";
+    if (std::string why = check_value("position" + at, od.position[i], counter); !why.empty()) return why;
+    if (std::string why = check_value("velocity" + at, od.velocity[i], counter); !why.empty()) return why;
+  }
+  for (const auto& [name, v] : {std::pair<const char*, double>{"yaw", od.yaw}, {"roll", od.roll}, {"pitch", od.pitch}})
+    if (std::string why = check_value(name, v, counter); !why.empty()) return why;
+  return "";
+}
+
+// The first non-finite field of the flight controller's LOCAL_POSITION_NED or ATTITUDE ("" when none).
+std::string non_finite_field(const mav::LocalPositionNed& m) {
+  const std::pair<const char*, float> fields[] = {{"x", m.x}, {"y", m.y}, {"z", m.z}, {"vx", m.vx}, {"vy", m.vy}, {"vz", m.vz}};
+  for (const auto& [name, v] : fields)
+    if (!std::isfinite(v)) return std::string("LOCAL_POSITION_NED ") + name + " = " + num(v);
+  return "";
+}
+
+std::string non_finite_field(const mav::Attitude& m) {
+  const std::pair<const char*, float> fields[] = {{"roll", m.roll}, {"pitch", m.pitch}, {"yaw", m.yaw}};
+  for (const auto& [name, v] : fields)
+    if (!std::isfinite(v)) return std::string("ATTITUDE ") + name + " = " + num(v);
   return "";
 }
 
@@ -58,8 +88,9 @@ Bridge::Bridge(const BridgeOptions& o, Send send, PublishState publish, app::Sta
       stream_period_us_(static_cast<int64_t>(std::llround(1e6 / o.stream_rate_hz))) {
   for (const char* name : {"setpoints_received", "setpoints_sent", "odometry_received", "odometry_sent",
                            "heartbeats_sent", "fc_heartbeats", "commands_sent", "undecodable", "rejected_nan",
-                           "rejected_geofence", "rejected_drone_id", "mavlink_bad_crc", "mavlink_bad_length",
-                           "mavlink_unknown_id", "mavlink_signed_frame", "mavlink_unknown_flags", "send_failed"})
+                           "rejected_range", "rejected_geofence", "rejected_drone_id", "mavlink_bad_crc", "mavlink_bad_length",
+                           "mavlink_unknown_id", "mavlink_signed_frame", "mavlink_unknown_flags", "mavlink_non_finite",
+                           "send_failed"})
     status_->count(name, 0);
   status_->set_state("no setpoint yet");
 }
@@ -83,11 +114,7 @@ std::string Bridge::check_setpoint(const fact::setpoint_t& sp, std::string* coun
     *counter = "rejected_drone_id";
     return "setpoint drone_id = " + std::to_string(sp.drone_id) + " (this bridge is drone " + std::to_string(o_.drone_id) + ")";
   }
-  const std::string bad = non_finite_field(sp);
-  if (!bad.empty()) {
-    *counter = "rejected_nan";
-    return "setpoint " + bad + " is not finite";
-  }
+  if (const std::string bad = bad_field(sp, counter); !bad.empty()) return "setpoint " + bad;
   for (int i = 0; i < 3; ++i) {
     if (sp.position[i] < o_.fence.min[i] || sp.position[i] > o_.fence.max[i]) {
       *counter = "rejected_geofence";
@@ -121,9 +148,9 @@ void Bridge::on_odometry(const fact::odometry_t& od, const std::string& channel,
                                     " (this bridge is drone " + std::to_string(o_.drone_id) + ")");
     return;
   }
-  const std::string bad = non_finite_field(od);
-  if (!bad.empty()) {
-    reject("rejected_nan", "odometry " + bad + " is not finite on " + channel);
+  std::string counter;
+  if (const std::string bad = bad_field(od, &counter); !bad.empty()) {
+    reject(counter, "odometry " + bad + " on " + channel);
     return;
   }
   // A sequence number that does not move forward means the VIO restarted: a reset for PX4's EKF2.
@@ -178,12 +205,19 @@ void Bridge::on_frame(const mav::Frame& f, int64_t now) {
     if (f.compid == o_.target_component) on_heartbeat(hb, now);
     return;
   }
-  if (mav::decode(f, &position_)) {
+  // A non-finite value from the flight controller is counted and dropped: the last valid one stays.
+  if (mav::LocalPositionNed position; mav::decode(f, &position)) {
+    if (const std::string bad = non_finite_field(position); !bad.empty())
+      return reject("mavlink_non_finite", "MAVLink from the FC: " + bad + " is not finite");
+    position_ = position;
     position_valid_ = true;
     position_at_ = now;
     return;
   }
-  if (mav::decode(f, &attitude_)) {
+  if (mav::Attitude attitude; mav::decode(f, &attitude)) {
+    if (const std::string bad = non_finite_field(attitude); !bad.empty())
+      return reject("mavlink_non_finite", "MAVLink from the FC: " + bad + " is not finite");
+    attitude_ = attitude;
     attitude_valid_ = true;
     attitude_at_ = now;
   }

@@ -16,6 +16,12 @@
 
 namespace fact::bridge {
 
+// Largest |value| forwarded to the flight controller, in the field's unit (m, m/s, m/s², rad,
+// rad/s), for setpoints, odometry and the geofence's bounds: far beyond any drone's, and held by a
+// float to 0.06. MAVLink carries floats, and a double that is finite but beyond a float's range
+// (1e39) would reach the flight controller as ±inf (review, session 30).
+constexpr double kLargestValue = 1e6;
+
 // Setpoints outside this box (m, in f_i) are rejected.
 struct Geofence {
   std::array<double, 3> min{-50, -50, -1};
@@ -39,6 +45,9 @@ struct BridgeOptions {
   double state_rate_hz = 10;            // fc_state publication rate
 };
 
+// Every `now` is µs on one clock that does not jump (fact::app::monotonic_us in fact-fc-bridge):
+// the stream's stop rules and schedules are differences on it. state()'s utime is that clock's;
+// the app stamps fc_state with its wall clock when it publishes.
 class Bridge {
  public:
   using Send = std::function<void(const std::vector<uint8_t>&)>;

@@ -43,18 +43,32 @@ class UdpLink : public Link {
     return false;
   }
   long receive(uint8_t* buf, std::size_t n, std::string* error) override {
-    const ssize_t got = ::recv(fd_, buf, n, 0);
-    if (got >= 0) return static_cast<long>(got);
+    sockaddr_in from{};
+    socklen_t length = sizeof from;
+    const ssize_t got = ::recvfrom(fd_, buf, n, 0, reinterpret_cast<sockaddr*>(&from), &length);
+    if (got >= 0) {
+      if (from.sin_addr.s_addr == remote_.sin_addr.s_addr && from.sin_port == remote_.sin_port) return static_cast<long>(got);
+      ignored_ = "ignored a " + std::to_string(got) + "-byte datagram from " + address(from) +
+                 ", not the flight controller " + address(remote_);
+      return 0;
+    }
     if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR || errno == ECONNREFUSED) return 0;
     *error = "recv on " + text_ + ": " + errno_text();
     return -1;
   }
+  std::string take_ignored() override { return std::exchange(ignored_, std::string()); }
   std::string describe() const override { return "udp " + text_; }
 
  private:
+  static std::string address(const sockaddr_in& a) {
+    char host[INET_ADDRSTRLEN] = "?";
+    ::inet_ntop(AF_INET, &a.sin_addr, host, sizeof host);
+    return std::string(host) + ":" + std::to_string(ntohs(a.sin_port));
+  }
   int fd_;
   sockaddr_in remote_;
   std::string text_;
+  std::string ignored_;  // the last dropped datagram's description, until take_ignored()
 };
 
 struct BaudEntry {

@@ -30,10 +30,15 @@ class Link {
   virtual bool send(const std::vector<uint8_t>& bytes, std::string* error) = 0;
   // Reads what is available into buf: > 0 bytes read, 0 nothing now, -1 the link failed (*error set).
   virtual long receive(uint8_t* buf, std::size_t n, std::string* error) = 0;
+  // What the last receive() dropped instead of returning ("" when nothing), then "": the UDP link
+  // takes datagrams only from the flight controller's address and port.
+  virtual std::string take_ignored() { return ""; }
   virtual std::string describe() const = 0;
 };
 
-// "LOCAL_PORT:REMOTE_HOST:REMOTE_PORT": binds UDP LOCAL_PORT on all addresses, sends to the remote.
+// "LOCAL_PORT:REMOTE_HOST:REMOTE_PORT": binds UDP LOCAL_PORT on all addresses, sends to the remote
+// and takes datagrams only from it (a flight controller replies from the port it listens on, as
+// PX4 does; another host or process could otherwise keep "FC connected" alive: review, session 30).
 struct UdpSpec {
   int local_port = 0;
   std::string remote_host;

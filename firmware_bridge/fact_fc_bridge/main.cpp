@@ -63,13 +63,13 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--target-system", o.target_system, "The flight controller's system id (1..255)")->capture_default_str();
   app.add_option("--target-component", o.target_component, "The flight controller's component id (1..255)")->capture_default_str();
   app.add_option("--stream-rate", o.stream_rate, "Setpoint stream rate in Hz (PX4 needs > 2 Hz; at most 500)")->capture_default_str();
-  app.add_option("--setpoint-timeout", o.setpoint_timeout, "s: an older setpoint stops the stream")->capture_default_str();
-  app.add_option("--heartbeat-timeout", o.heartbeat_timeout, "s: an older FC heartbeat stops the stream")->capture_default_str();
+  app.add_option("--setpoint-timeout", o.setpoint_timeout, "s (0.01..60): an older setpoint stops the stream")->capture_default_str();
+  app.add_option("--heartbeat-timeout", o.heartbeat_timeout, "s (0.01..60): an older FC heartbeat stops the stream")->capture_default_str();
   app.add_option("--geofence", o.geofence, "Setpoint box in f_i, m: XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX")->capture_default_str();
   app.add_flag("--arm", o.arm, "Request arming (COMMAND_LONG 400) once setpoints have streamed for 1 s");
   app.add_flag("--offboard", o.offboard, "Request PX4 OFFBOARD mode (COMMAND_LONG 176) once setpoints have streamed for 1 s");
   app.add_option("--command-tries", o.command_tries, "Arm / offboard requests: rounds (1 s apart) before giving up")->capture_default_str();
-  app.add_option("--state-rate", o.state_rate, "fc_state publication rate in Hz")->capture_default_str();
+  app.add_option("--state-rate", o.state_rate, "fc_state publication rate in Hz (0.01..100)")->capture_default_str();
   app.add_option("--setpoint-channel", o.setpoint_channel, "Input (default FACT_SETPOINT_<id>)")->type_name("CHANNEL");
   app.add_option("--odometry-channel", o.odometry_channel, "Input (default FACT_ODOMETRY_<id>)")->type_name("CHANNEL");
   app.add_option("--state-channel", o.state_channel, "Output (default FACT_FC_STATE_<id>)")->type_name("CHANNEL");
@@ -80,8 +80,9 @@ void add_flags(CLI::App& app, Options& o) {
       "BODY_FRD (velocity rotated into the body), covariances unknown (NaN), estimator VIO.\n"
       "Setpoints stream only while the newest valid setpoint and the FC heartbeat are fresh; then\n"
       "the bridge stops sending so that PX4's offboard-loss failsafe engages, and logs why.\n"
-      "Rejected (counted on FACT_STATUS, logged, never sent): NaN/inf, outside the geofence,\n"
-      "another drone's id, undecodable LCM; malformed MAVLink from the FC counted by reason.\n"
+      "Rejected (counted on FACT_STATUS, logged, never sent): NaN/inf, |value| > 1e6, outside the\n"
+      "geofence, another drone's id, undecodable LCM; malformed MAVLink and NaN/inf values from the\n"
+      "FC counted by reason, UDP datagrams from another address or port than the FC's ignored.\n"
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 1 LCM or link failure; 2 bad flags.");
 }
 
@@ -103,6 +104,8 @@ fact::bridge::Geofence parse_geofence(const std::string& text) {
     }
     if (used != part.size() || part.empty() || !std::isfinite(d))
       throw FlagError("--geofence: '" + part + "' in '" + text + "' is not a finite number");
+    if (std::abs(d) > fact::bridge::kLargestValue)
+      throw FlagError("--geofence: '" + part + "' in '" + text + "' is beyond ±1e+06 m");
     v.push_back(d);
   }
   if (v.size() != 6) throw FlagError("--geofence: expected 6 numbers XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX, got '" + text + "'");
@@ -139,9 +142,12 @@ fact::bridge::BridgeOptions check(Options& o) {
   fact::app::check_positive("--stream-rate", o.stream_rate);
   if (o.stream_rate <= 2 || o.stream_rate > 500)
     throw FlagError("--stream-rate: expected more than 2 Hz (PX4's offboard minimum) and at most 500, got " + std::to_string(o.stream_rate));
-  fact::app::check_positive("--setpoint-timeout", o.setpoint_timeout);
-  fact::app::check_positive("--heartbeat-timeout", o.heartbeat_timeout);
-  fact::app::check_positive("--state-rate", o.state_rate);
+  // Timeouts below 10 ms stop the stream between two setpoints; beyond a minute they stream a
+  // dead planner's setpoint that long. A state rate above 100 Hz floods the bus and, like a rate
+  // whose period rounds to 0 µs, keeps the loop busy (review, session 30).
+  fact::app::check_range("--setpoint-timeout", o.setpoint_timeout, 0.01, 60, "s");
+  fact::app::check_range("--heartbeat-timeout", o.heartbeat_timeout, 0.01, 60, "s");
+  fact::app::check_range("--state-rate", o.state_rate, 0.01, 100, "Hz");
   if (o.command_tries < 1) throw FlagError("--command-tries: expected >= 1, got " + std::to_string(o.command_tries));
   const int id = o.common.drone_id;
   if (o.setpoint_channel.empty()) o.setpoint_channel = fact::app::channel("FACT_SETPOINT", id);
@@ -164,17 +170,25 @@ fact::bridge::BridgeOptions check(Options& o) {
   return b;
 }
 
+// Counts an event on FACT_STATUS and logs it: the first 10, then every 100th.
+void count_and_log(fact::app::Status& status, const fact::app::Log& log, const std::string& counter,
+                   const std::string& what) {
+  status.count(counter);
+  const int64_t n = status.value(counter);
+  if (n <= 10 || n % 100 == 0) log.event(what + " (" + counter + " = " + std::to_string(n) + ")");
+}
+
 // The LCM side: decodes inputs and hands them to the bridge.
 class Inputs {
  public:
   Inputs(fact::bridge::Bridge& b, fact::app::Status& s, const fact::app::Log& l) : bridge_(b), status_(s), log_(l) {}
   void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     fact::setpoint_t m;
-    if (fact::app::decode(rbuf, channel, &m, &status_, log_)) bridge_.on_setpoint(m, channel, fact::app::now_us());
+    if (fact::app::decode(rbuf, channel, &m, &status_, log_)) bridge_.on_setpoint(m, channel, fact::app::monotonic_us());
   }
   void on_odometry(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     fact::odometry_t m;
-    if (fact::app::decode(rbuf, channel, &m, &status_, log_)) bridge_.on_odometry(m, channel, fact::app::now_us());
+    if (fact::app::decode(rbuf, channel, &m, &status_, log_)) bridge_.on_odometry(m, channel, fact::app::monotonic_us());
   }
 
  private:
@@ -188,9 +202,10 @@ int run(lcm::LCM& lcm, fact::bridge::Link& link, fact::bridge::Bridge& bridge, f
         const fact::app::Log& log) {
   std::vector<uint8_t> buf(4096);
   while (!fact::app::stop_requested()) {
-    const int64_t now = fact::app::now_us();
+    // The bridge's timeouts and schedule run on the monotonic clock; the status stamps wall time.
+    const int64_t now = fact::app::monotonic_us();
     bridge.tick(now);
-    status.tick(now);
+    status.tick(fact::app::now_us());
     pollfd fds[2] = {{lcm.getFileno(), POLLIN, 0}, {link.fd(), POLLIN, 0}};
     const int timeout_ms = static_cast<int>((bridge.wait_us(now) + 999) / 1000);
     const int n = ::poll(fds, 2, timeout_ms);
@@ -212,7 +227,8 @@ int run(lcm::LCM& lcm, fact::bridge::Link& link, fact::bridge::Bridge& bridge, f
         log.event("error: " + error);
         return 1;
       }
-      if (got > 0) bridge.on_fc_bytes(buf.data(), static_cast<std::size_t>(got), fact::app::now_us());
+      if (got > 0) bridge.on_fc_bytes(buf.data(), static_cast<std::size_t>(got), fact::app::monotonic_us());
+      if (const std::string ignored = link.take_ignored(); !ignored.empty()) count_and_log(status, log, "foreign_datagrams", ignored);
     }
   }
   return 0;
@@ -256,18 +272,18 @@ int main(int argc, char** argv) {
   status.set_period_us(std::llround(options.common.status_period * 1e6));
   auto send = [&](const std::vector<uint8_t>& bytes) {
     std::string error;
-    if (!link->send(bytes, &error)) {
-      status.count("send_failed");
-      const int64_t n = status.value("send_failed");
-      if (n <= 10 || n % 100 == 0) log.event("send failed: " + error + " (send_failed = " + std::to_string(n) + ")");
-    }
-    if (dump) {
-      std::fwrite(bytes.data(), 1, bytes.size(), dump);
-      std::fflush(dump);
-    }
+    if (!link->send(bytes, &error)) count_and_log(status, log, "send_failed", "send failed: " + error);
+    if (dump && (std::fwrite(bytes.data(), 1, bytes.size(), dump) != bytes.size() || std::fflush(dump) != 0))
+      count_and_log(status, log, "dump_failed", "--dump: cannot write to '" + options.dump + "': " + std::strerror(errno));
   };
-  auto publish = [&](const fact::fc_state_t& s) { lcm.publish(options.state_channel, &s); };
+  auto publish = [&](const fact::fc_state_t& s) {  // stamped on the app clock (the bridge's is monotonic)
+    fact::fc_state_t stamped = s;
+    stamped.utime = fact::app::now_us();
+    lcm.publish(options.state_channel, &stamped);
+  };
   fact::bridge::Bridge bridge(bridge_options, send, publish, &status, log);
+  status.count("foreign_datagrams", 0);
+  if (dump) status.count("dump_failed", 0);
   Inputs inputs(bridge, status, log);
   lcm.subscribe(options.setpoint_channel, &Inputs::on_setpoint, &inputs);
   lcm.subscribe(options.odometry_channel, &Inputs::on_odometry, &inputs);
@@ -276,7 +292,7 @@ int main(int argc, char** argv) {
             std::to_string(options.target_component) + "; setpoints " + options.setpoint_channel + ", odometry " +
             options.odometry_channel + ", state " + options.state_channel + (options.arm ? "; --arm" : "") +
             (options.offboard ? "; --offboard" : ""));
-  const int64_t started = fact::app::now_us();
+  const int64_t started = fact::app::monotonic_us();
   const int rc = run(lcm, *link, bridge, status, log);
   status.set_state(rc == 0 ? "stopped" : "failed");
   status.publish(fact::app::now_us());
@@ -284,7 +300,7 @@ int main(int argc, char** argv) {
   rusage use{};
   ::getrusage(RUSAGE_SELF, &use);
   const double cpu_s = use.ru_utime.tv_sec + use.ru_stime.tv_sec + 1e-6 * (use.ru_utime.tv_usec + use.ru_stime.tv_usec);
-  const double wall_s = 1e-6 * static_cast<double>(fact::app::now_us() - started);
+  const double wall_s = 1e-6 * static_cast<double>(fact::app::monotonic_us() - started);
   std::ostringstream line;
   line << (rc == 0 ? "stopped" : "exiting after a failure") << "; cpu_s=" << cpu_s << " wall_s=" << wall_s
        << " setpoints_sent=" << status.value("setpoints_sent") << " odometry_sent=" << status.value("odometry_sent");

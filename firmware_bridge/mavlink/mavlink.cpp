@@ -282,6 +282,11 @@ void Parser::reject(Reject r, uint32_t msgid, std::string detail, std::size_t sk
   if (on_reject) on_reject(j);
 }
 
+std::size_t Parser::unverified_skip(std::size_t total) const {
+  const std::size_t end = start_ + total;
+  return end == buffer_.size() || buffer_[end] == kStx ? total : 1;
+}
+
 bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reject) {
   std::size_t at = start_;
   while (at < buffer_.size() && buffer_[at] != kStx) ++at;
@@ -302,14 +307,14 @@ bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reje
   const std::size_t total = kHeaderLength + len + kCrcLength + (is_signed ? kSignatureLength : 0);
   if (available < total) return false;
   if (is_signed) {
-    reject(Reject::signed_frame, msgid, "signed frame (" + describe(msgid) + "): signing is not supported", total,
-           on_reject);
+    reject(Reject::signed_frame, msgid, "signed frame (" + describe(msgid) + "): signing is not supported",
+           unverified_skip(total), on_reject);
     return true;
   }
   const MessageInfo* m = message_info(msgid);
   if (m == nullptr) {
-    reject(Reject::unknown_id, msgid, "unknown msgid " + std::to_string(msgid) + " (no CRC_EXTRA to check it)", total,
-           on_reject);
+    reject(Reject::unknown_id, msgid, "unknown msgid " + std::to_string(msgid) + " (no CRC_EXTRA to check it)",
+           unverified_skip(total), on_reject);
     return true;
   }
   const uint16_t got = static_cast<uint16_t>(b[kHeaderLength + len] | (b[kHeaderLength + len + 1] << 8));

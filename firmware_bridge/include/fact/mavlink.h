@@ -232,9 +232,12 @@ struct Rejection {
 };
 
 // Splits a byte stream into frames. Bytes may arrive in any chunks; garbage before a start byte
-// is skipped (counted in skipped_bytes()). After a bad CRC or a bad length the parser drops only
-// the start byte and searches again (the frame may have been a false start inside garbage); an
-// unknown id or a signed frame is skipped whole (its length is taken as given).
+// is skipped (counted in skipped_bytes()). After a bad CRC or unknown incompat flags the parser
+// drops only the start byte and searches again (the frame may have been a false start inside
+// garbage); a frame whose CRC holds but whose payload is too long is skipped whole. A frame it
+// cannot verify (an unknown id: no CRC_EXTRA; a signed frame) is skipped whole only when another
+// start byte follows it or it ends the bytes held, as a real frame does; otherwise only its start
+// byte goes, since a false start claiming up to 280 bytes would swallow the good frames behind it.
 class Parser {
  public:
   using FrameHandler = std::function<void(const Frame&)>;
@@ -253,6 +256,8 @@ class Parser {
   // Tries to take one frame at start_; false when more bytes are needed.
   bool take_one(const FrameHandler& on_frame, const RejectHandler& on_reject);
   void reject(Reject r, uint32_t msgid, std::string detail, std::size_t skip, const RejectHandler& on_reject);
+  // Bytes to skip for an unverifiable frame of `total` bytes at start_: total or 1 (see above).
+  std::size_t unverified_skip(std::size_t total) const;
 
   std::vector<uint8_t> buffer_;
   std::size_t start_ = 0;  // first unread byte of buffer_
