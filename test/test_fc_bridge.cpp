@@ -47,7 +47,6 @@ constexpr double kPi = 3.14159265358979323846;
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 using fact::test::only_loopback;
-using fact::test::read_text;
 
 double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -380,8 +380,8 @@ TEST(MavlinkParser, SignedFrameIsRejected) {
 }
 
 // A start byte in garbage whose header reads as an unknown id cannot be verified; were it skipped
-// for the length it claims (here 60 bytes), it would swallow the heartbeats behind it (review,
-// session 30: 0 of 4 parsed).
+// for the length it claims (here 60 bytes), it would swallow heartbeats behind it (review,
+// session 30; the previous parser passes 1 of the 4).
 TEST(MavlinkParser, FalseStartWithAnUnknownIdDoesNotSwallowTheFramesBehindIt) {
   std::vector<uint8_t> stream = {0x11, 0x22, mav::kStx, 60, 0, 0, 0, 1, 1, 124, 0, 0};  // msgid 124: unknown here
   mav::Encoder enc({1, 1});

@@ -52,7 +52,6 @@ const char* const kUrl = "udpm://239.255.76.67:7667?ttl=0";
 constexpr double kPi = 3.14159265358979323846;
 
 using fact::test::only_loopback;
-using fact::test::read_text;
 
 // A child process with stderr in a file (app_process.h).
 using Process = fact::test::AppProcess;

@@ -47,7 +47,6 @@ constexpr double kPi = 3.14159265358979323846;
 const std::string kApp = "fact-vio-relay";
 
 using fact::test::only_loopback;
-using fact::test::read_text;
 
 int count_of(const std::string& text, const std::string& what) {
   int n = 0;
