@@ -169,6 +169,18 @@ TEST(LocalMap, BadInputNamed) {
   b.w = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(map.add_frame(v, {}, mp, {b}), "drone_boxes[0] is not finite");
   EXPECT_EQ(map.occupied_voxels(), 0);
+  b = {200, 20, 20, -60, 1};
+  EXPECT_EQ(map.add_frame(v, {}, mp, {b}), "drone_boxes[0] has a negative size (20.000000 × -60.000000 px)");
+  // Boxes partly or wholly outside the image (and one far beyond an int) mask only what lies
+  // inside: the frame integrates (fact-planner crashed on a box right of the image: review,
+  // session 30).
+  using Box = fact::BoxDetection;
+  for (const Box& outside : {Box{450, 20, 20, 20, 1}, Box{-100, 20, 20, 20, 1}, Box{200, -90, 20, 20, 1},
+                             Box{1e30f, 1e30f, 5, 5, 1}, Box{410, 230, 40, 40, 1}}) {
+    fact::FrameIntegration st;
+    EXPECT_EQ(map.add_frame(v, {}, mp, {outside}, &st), "") << outside.u << ", " << outside.v;
+  }
+  EXPECT_GT(map.occupied_voxels(), 0);
   fact::LocalMapParams bad;
   bad.resolution = 0;
   EXPECT_NE(fact::local_map_params_error(bad).find("resolution"), std::string::npos);

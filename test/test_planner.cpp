@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 
 namespace {
 
@@ -162,6 +163,19 @@ TEST(PlannerRules, NoMoveOutlastsTheSynchronisedSpinSlot) {
   EXPECT_NE(fact::planner_params_error(bad).find("move_settle"), std::string::npos);
   bad.move_settle = std::numeric_limits<double>::quiet_NaN();
   EXPECT_NE(fact::planner_params_error(bad).find("move_settle"), std::string::npos);
+  // Values no drone of this swarm flies with (review, session 30: all were accepted and gave
+  // infinite or hour-long trajectories).
+  const std::pair<double fact::PlannerParams::*, double> absurd[] = {
+      {&fact::PlannerParams::v_max, 1e9},         {&fact::PlannerParams::a_max, 1e9},
+      {&fact::PlannerParams::spin_rate, 1e-12},   {&fact::PlannerParams::yaw_accel, 1e-12},
+      {&fact::PlannerParams::move_max, 1e300},    {&fact::PlannerParams::move_settle, 1e300},
+      {&fact::PlannerParams::takeoff_max, 1e9},   {&fact::PlannerParams::z_max, 1e9}};
+  for (const auto& [field, value] : absurd) {
+    fact::PlannerParams q = p;
+    q.*field = value;
+    EXPECT_NE(fact::planner_params_error(q), "") << value;
+  }
+  EXPECT_EQ(fact::planner_params_error(p), "");
 }
 
 TEST(PlannerRules, TargetTowardTheFarthestObservedDrone) {

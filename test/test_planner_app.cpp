@@ -25,6 +25,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/app.h"
@@ -306,6 +307,9 @@ TEST_F(PlannerApp, FullCycleAmbiguousThenCertified) {
     }
     if (starts_with(s, "wait round 0") && std::isnan(spin0_end_yaw)) {
       spin0_end_yaw = yaw_sp();
+      // An impossible round count first: kept, it would shadow every real result after it and
+      // hold the drone as certified (review, session 30); it must be rejected.
+      w.publish_result("certified", 1000);
       w.publish_rounds(1);
       w.publish_result("ambiguous", 1);
     }
@@ -440,6 +444,20 @@ TEST_F(PlannerApp, BadFlagsExit2) {
     Process p({FACT_PLANNER_BINARY, "--drone-id", "0", "--takeoff-min", "2", "--takeoff-max", "1"}, "/dev/null",
               dir_ / "c.err");
     EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2);
+  }
+  // A timeout that rounds to 0 µs hovered for ever, one beyond llround never waited; absurd speeds
+  // were accepted (review, session 30).
+  const std::pair<std::vector<std::string>, std::string> absurd[] = {
+      {{"--odometry-timeout", "1e-9"}, "--odometry-timeout: expected a number in [0.01, 60] s, got 1e-09"},
+      {{"--wait-timeout", "1e300"}, "--wait-timeout: expected a number in [0.01, 3600] s, got 1e+300"},
+      {{"--v-max", "1e9"}, "v_max"},
+      {{"--spin-rate", "1e-12"}, "spin_rate"}};
+  for (const auto& [flags, message] : absurd) {
+    std::vector<std::string> words = {FACT_PLANNER_BINARY, "--drone-id", "0"};
+    words.insert(words.end(), flags.begin(), flags.end());
+    Process p(words, "/dev/null", dir_ / "d.err");
+    EXPECT_EQ(p.wait_for(std::chrono::seconds(5)), 2) << flags[0];
+    EXPECT_NE(p.err().find(message), std::string::npos) << p.err();
   }
 }
 

@@ -139,8 +139,10 @@ void check(Options& o) {
   def(o.setpoint_channel, "FACT_SETPOINT");
   if (!(o.setpoint_rate >= 20 && o.setpoint_rate <= 1000))
     throw FlagError("--setpoint-rate: expected a number in [20, 1000] Hz, got " + std::to_string(o.setpoint_rate));
-  fact::app::check_positive("--odometry-timeout", o.odometry_timeout);
-  fact::app::check_positive("--wait-timeout", o.wait_timeout);
+  // (a timeout that rounds to 0 µs hovers for ever, one beyond llround's range never waits: review,
+  // session 30)
+  fact::app::check_range("--odometry-timeout", o.odometry_timeout, 0.01, 60, "s");
+  fact::app::check_range("--wait-timeout", o.wait_timeout, 0.01, 3600, "s");
   if (!(o.frame_wait >= 0 && o.frame_wait < 10))
     throw FlagError("--frame-wait: expected a number in [0, 10) s, got " + std::to_string(o.frame_wait));
   if (o.max_rounds < 1) throw FlagError("--max-rounds: expected >= 1, got " + std::to_string(o.max_rounds));
@@ -186,6 +188,21 @@ class PoseBuffer {
   std::deque<Pose> samples_;
 };
 
+// Odometry beyond what a drone of this swarm reports ("" when within): positions within 10 km
+// (as the estimator's input), velocities within 100 m/s, angles within ±1e6 rad (yaw is unwrapped).
+// A takeoff planned from z = 1e300 had an infinite duration and NaN setpoints, one from -1e7 m took
+// 5.5 s to plan (review, session 30).
+std::string odometry_out_of_range(const fact::odometry_t& m) {
+  for (int i = 0; i < 3; ++i) {
+    const std::string at = "[" + std::to_string(i) + "] = ";
+    if (std::abs(m.position[i]) > 1e4) return "position" + at + std::to_string(m.position[i]) + " m is beyond ±1e4 m";
+    if (std::abs(m.velocity[i]) > 100) return "velocity" + at + std::to_string(m.velocity[i]) + " m/s is beyond ±100 m/s";
+  }
+  for (const auto& [name, v] : {std::pair<const char*, double>{"yaw", m.yaw}, {"pitch", m.pitch}, {"roll", m.roll}})
+    if (std::abs(v) > 1e6) return std::string(name) + " = " + std::to_string(v) + " rad is beyond ±1e6 rad";
+  return "";
+}
+
 bool finite(const double* v, int n) {
   for (int i = 0; i < n; ++i)
     if (!std::isfinite(v[i])) return false;
@@ -219,7 +236,8 @@ class Planner {
         map_(o.map) {
     status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
     for (const char* c : {"odometry", "detections", "observations", "frames", "frames_mapped", "frames_without_detections",
-                          "swarm_rounds", "results", "setpoints", "rejected_setpoint", "rejected_nan", "wrong_drone_id",
+                          "swarm_rounds", "results", "setpoints", "rejected_setpoint", "rejected_nan", "rejected_range",
+                          "wrong_drone_id",
                           "out_of_order", "invalid_input", "undecodable", "no_odometry_at_time", "map_failed", "plans",
                           "hover", "wait_timeouts", "publish_failed"})
       status_.count(c, 0);
@@ -238,6 +256,8 @@ class Planner {
     if (!finite(m.position, 3) || !finite(m.velocity, 3) || !std::isfinite(m.yaw) || !std::isfinite(m.roll) ||
         !std::isfinite(m.pitch))
       return reject("rejected_nan", "odometry seq " + std::to_string(m.seq) + " has a non-finite field");
+    if (std::string why = odometry_out_of_range(m); !why.empty())
+      return reject("rejected_range", "odometry seq " + std::to_string(m.seq) + ": " + why);
     if (!poses_.empty() && m.utime <= poses_.newest().utime)
       return reject("out_of_order", "odometry utime " + std::to_string(m.utime) + " not after the previous one");
     status_.count("odometry");
@@ -253,6 +273,10 @@ class Planner {
       if (!finite(d.vector, 3) || !std::isfinite(d.box[0]) || !std::isfinite(d.box[1]) || !std::isfinite(d.box[2]) ||
           !std::isfinite(d.box[3]))
         return reject("rejected_nan", "detections of frame " + std::to_string(m.frame_seq) + " have a non-finite field");
+    for (const fact::detection_t& d : m.detections)
+      if (d.box[2] < 0 || d.box[3] < 0)
+        return reject("invalid_input", "detections of frame " + std::to_string(m.frame_seq) + ": box size " +
+                                           std::to_string(d.box[2]) + " × " + std::to_string(d.box[3]) + " px is negative");
     status_.count("detections");
     std::vector<fact::BoxDetection> boxes;
     for (const fact::detection_t& d : m.detections) boxes.push_back({d.box[0], d.box[1], d.box[2], d.box[3], d.confidence});
@@ -312,6 +336,13 @@ class Planner {
     fact::Estimate e;
     if (std::string err = fact::app::result_from_message(m, &e); !err.empty())
       return reject("invalid_input", "swarm_result on " + ch + ": " + err);
+    // The kept result is the one with the most rounds: an impossible count would shadow every real
+    // one after it (review, session 30). One round ahead of the rounds received is allowed: the
+    // result may overtake its rounds message, or that message may have been lost.
+    if (m.rounds_used < 0 || m.rounds_used > complete_rounds_ + 1)
+      return reject("invalid_input", "swarm_result on " + ch + ": rounds_used = " + std::to_string(m.rounds_used) +
+                                         " is outside [0, " + std::to_string(complete_rounds_ + 1) +
+                                         "] (complete rounds received + 1)");
     status_.count("results");
     if (!result_ || m.rounds_used >= result_->rounds_used) result_ = m;
   }

@@ -60,6 +60,9 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
     const BoxDetection& b = drone_boxes[i];
     if (!std::isfinite(b.u) || !std::isfinite(b.v) || !std::isfinite(b.w) || !std::isfinite(b.h))
       return "drone_boxes[" + std::to_string(i) + "] is not finite";
+    if (b.w < 0 || b.h < 0)
+      return "drone_boxes[" + std::to_string(i) + "] has a negative size (" + std::to_string(b.w) + " × " +
+             std::to_string(b.h) + " px)";
   }
   const int W = k.width, H = k.height;
   // Ray tables for these intrinsics.
@@ -76,12 +79,14 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
   for (const BoxDetection& b : drone_boxes) {
     const double gu = params_.box_dilation_px + params_.box_dilation_fraction * b.w;
     const double gv = params_.box_dilation_px + params_.box_dilation_fraction * b.h;
-    // The box encloses pixel centres u ∈ [b.u, b.u + b.w] (fact/frame.h).
-    const int u0 = std::max(0, static_cast<int>(std::floor(b.u - gu + 0.5)));
-    const int u1 = std::min(W - 1, static_cast<int>(std::ceil(b.u + b.w + gu - 0.5)));
-    const int v0 = std::max(0, static_cast<int>(std::floor(b.v - gv + 0.5)));
-    const int v1 = std::min(H - 1, static_cast<int>(std::ceil(b.v + b.h + gv - 0.5)));
-    for (int v = v0; v <= v1; ++v) std::fill(mask_.begin() + v * W + u0, mask_.begin() + v * W + u1 + 1, 1);
+    // The box encloses pixel centres u ∈ [b.u, b.u + b.w] (fact/frame.h), clipped to the image in
+    // double before any int conversion: a box beyond the image's edge gave a reversed fill range
+    // (and 1e30 an undefined conversion), which crashed fact-planner (review, session 30).
+    const double u0 = std::max(0.0, std::floor(b.u - gu + 0.5)), u1 = std::min(W - 1.0, std::ceil(b.u + b.w + gu - 0.5));
+    const double v0 = std::max(0.0, std::floor(b.v - gv + 0.5)), v1 = std::min(H - 1.0, std::ceil(b.v + b.h + gv - 0.5));
+    if (!(u0 <= u1 && v0 <= v1)) continue;  // nothing of it in the image
+    for (int v = static_cast<int>(v0); v <= static_cast<int>(v1); ++v)
+      std::fill(mask_.begin() + v * W + static_cast<int>(u0), mask_.begin() + v * W + static_cast<int>(u1) + 1, 1);
   }
   // p_f = R_fc · p_c + t_fc; R_fc (3×3) = attitude · R_body_cam, t_fc (3) = attitude · t_body_cam + position.
   const Eigen::Matrix3d att = body_attitude(pose.yaw, pose.pitch, pose.roll);

@@ -56,6 +56,19 @@ Eigen::Vector3d horizontal_dir(double angle) { return Eigen::Vector3d(std::cos(a
 std::string planner_params_error(const PlannerParams& p) {
   auto bad = [](const char* name, double v) { return std::string("PlannerParams.") + name + " = " + std::to_string(v) + " is invalid"; };
   auto pos = [](double v) { return std::isfinite(v) && v > 0; };
+  // Upper ends (and the rates' lower ends) beyond any drone this planner flies: out there a value is
+  // a typo, and made trajectories of infinite or hour-long duration (review, session 30: --v-max 1e9,
+  // --spin-rate 1e-12, --move-max 1e300 were accepted).
+  auto within = [](double v, double lo, double hi) { return v >= lo && v <= hi; };
+  if (!within(p.takeoff_max, 0, 1000)) return bad("takeoff_max", p.takeoff_max);
+  if (!within(p.z_min, -1000, 1000)) return bad("z_min", p.z_min);
+  if (!within(p.z_max, -1000, 1000)) return bad("z_max", p.z_max);
+  if (!within(p.spin_rate, 0.01, 10)) return bad("spin_rate", p.spin_rate);
+  if (!within(p.yaw_accel, 0.01, 100)) return bad("yaw_accel", p.yaw_accel);
+  if (!within(p.move_max, 0, 100)) return bad("move_max", p.move_max);
+  if (!within(p.v_max, 0.01, 20)) return bad("v_max", p.v_max);
+  if (!within(p.a_max, 0.01, 50)) return bad("a_max", p.a_max);
+  if (!within(p.move_settle, 0, 60)) return bad("move_settle", p.move_settle);
   if (!std::isfinite(p.takeoff_min) || p.takeoff_min < 0) return bad("takeoff_min", p.takeoff_min);
   if (!std::isfinite(p.takeoff_max) || p.takeoff_max < p.takeoff_min) return bad("takeoff_max", p.takeoff_max);
   if (!pos(p.spin_rate)) return bad("spin_rate", p.spin_rate);
