@@ -109,6 +109,7 @@ const char* counter_name(Rejection r) {
     case Rejection::jump: return "rejected_jump";
     case Rejection::bad_attitude: return "rejected_attitude";
     case Rejection::malformed: return "rejected_malformed";
+    case Rejection::out_of_range: return "rejected_range";
   }
   return "rejected_unknown";
 }
@@ -159,40 +160,70 @@ FilterResult OdometryFilter::push(const OdometryInput& in) {
   if (std::abs(in.utime) > kMaxUtime)
     return reject(Rejection::bad_time, "utime " + number(in.utime) + " us is beyond the int64 range");
 
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(in.position[i]) > options_.max_position)
+      return reject(Rejection::out_of_range, "position[" + std::to_string(i) + "] = " + number(in.position[i]) +
+                                                 " m is beyond ±" + number(options_.max_position) + " m");
+
   OdometryOutput out;
   out.utime = std::llround(in.utime);
   out.position = in.position;
   out.roll = in.roll;
   out.pitch = in.pitch;
-  if (!has_last_) {
+  bool restarted = false;
+  if (has_last_) {
+    Rejection kind = Rejection::none;
+    std::string why;
+    if (out.utime <= last_.utime) {
+      kind = Rejection::out_of_order;
+      why = "utime " + std::to_string(out.utime) + " us is not after the last accepted " + std::to_string(last_.utime) + " us";
+    } else {
+      why = jump_from_last(in, out.utime);
+      if (!why.empty()) kind = Rejection::jump;
+    }
+    if (kind != Rejection::none) {
+      if (++consecutive_ < options_.restart_after) return reject(kind, why);
+      restarted = true;
+    }
+  }
+  if (!has_last_ || restarted) {
     out.yaw = in.yaw;
     out.velocity = in.has_velocity ? in.velocity : Eigen::Vector3d::Zero();
     out.seq = 0;
   } else {
-    if (out.utime <= last_.utime)
-      return reject(Rejection::out_of_order, "utime " + std::to_string(out.utime) + " us is not after the last accepted " +
-                                                 std::to_string(last_.utime) + " us");
     const double dt = static_cast<double>(out.utime - last_.utime) / 1e6;  // s, > 0
-    const Eigen::Vector3d step = in.position - last_.position;
-    const double speed = step.norm() / dt;
-    if (!(speed <= options_.max_speed))
-      return reject(Rejection::jump, "position jump of " + number(step.norm()) + " m in " + number(dt) + " s (" +
-                                         number(speed) + " m/s > max " + number(options_.max_speed) + " m/s)");
-    const double dyaw = wrap_angle(in.yaw - last_.yaw);
-    const double yaw_rate = std::abs(dyaw) / dt;
-    if (!(yaw_rate <= options_.max_yaw_rate))
-      return reject(Rejection::jump, "yaw jump of " + number(dyaw) + " rad in " + number(dt) + " s (" + number(yaw_rate) +
-                                         " rad/s > max " + number(options_.max_yaw_rate) + " rad/s)");
-    out.yaw = last_.yaw + dyaw;
-    out.velocity = in.has_velocity ? in.velocity : Eigen::Vector3d(step / dt);
+    out.yaw = last_.yaw + wrap_angle(in.yaw - last_.yaw);
+    out.velocity = in.has_velocity ? in.velocity : Eigen::Vector3d((in.position - last_.position) / dt);
     out.seq = last_.seq + 1;
   }
+  consecutive_ = 0;
   ++counts_[static_cast<int>(Rejection::none)];
   has_last_ = true;
   last_ = out;
   FilterResult result;
   result.output = out;
+  result.restarted = restarted;
+  if (restarted)
+    result.detail = "stream restarted after " + std::to_string(options_.restart_after) +
+                    " samples in a row were out of order or jumps";
   return result;
+}
+
+std::string OdometryFilter::jump_from_last(const OdometryInput& in, int64_t utime) const {
+  const double dt = static_cast<double>(utime - last_.utime) / 1e6;  // s, > 0
+  if (dt > options_.max_gap)
+    return "time gap of " + number(dt) + " s after the last accepted sample (max " + number(options_.max_gap) + " s)";
+  const Eigen::Vector3d step = in.position - last_.position;
+  const double speed = step.norm() / dt;
+  if (!(speed <= options_.max_speed))
+    return "position jump of " + number(step.norm()) + " m in " + number(dt) + " s (" + number(speed) + " m/s > max " +
+           number(options_.max_speed) + " m/s)";
+  const double dyaw = wrap_angle(in.yaw - last_.yaw);
+  const double yaw_rate = std::abs(dyaw) / dt;
+  if (!(yaw_rate <= options_.max_yaw_rate))
+    return "yaw jump of " + number(dyaw) + " rad in " + number(dt) + " s (" + number(yaw_rate) + " rad/s > max " +
+           number(options_.max_yaw_rate) + " rad/s)";
+  return "";
 }
 
 FilterResult OdometryFilter::push(const PoseLine& line, double time_offset_us) {

@@ -294,6 +294,47 @@ TEST(OdometryFilter, AcceptsARealDiscontinuityOnceTheLimitsAllowIt) {
   EXPECT_EQ(f.last().position, Eigen::Vector3d(5, 0, 0));
 }
 
+// One bad sample must not block the stream for good (review, session 30: an absurd first
+// position, one accepted far-future time and a VIO clock restart each did).
+TEST(OdometryFilter, OneBadSampleNeverBlocksTheStream) {
+  {  // an absurd first position is out of range; the next sample starts the stream
+    fact::OdometryFilter f;
+    const fact::FilterResult r = f.push(sample(0.0, 1e300, 0, 0, 0));
+    EXPECT_EQ(r.rejection, fact::Rejection::out_of_range);
+    EXPECT_EQ(r.detail, "position[0] = 1e+300 m is beyond ±10000 m");
+    EXPECT_STREQ(fact::counter_name(r.rejection), "rejected_range");
+    EXPECT_TRUE(f.push(sample(0.1, 1, 0, 0, 0)).accepted());
+  }
+  {  // a far-future time is a jump (the gap), not the new reference
+    fact::OdometryFilter f;
+    ASSERT_TRUE(f.push(sample(1.00, 0, 0, 0, 0)).accepted());
+    const fact::FilterResult r = f.push(sample(1e9, 0, 0, 0, 0));
+    EXPECT_EQ(r.rejection, fact::Rejection::jump);
+    EXPECT_NE(r.detail.find("time gap of"), std::string::npos) << r.detail;
+    for (int k = 1; k <= 5; ++k) EXPECT_TRUE(f.push(sample(1.0 + 0.1 * k, 0, 0, 0, 0)).accepted()) << k;
+  }
+  {  // the VIO's clock restarts at 0: 19 samples rejected, the 20th restarts the stream (seq 0)
+    fact::OdometryFilter f;
+    for (int k = 0; k < 10; ++k) ASSERT_TRUE(f.push(sample(100 + 0.1 * k, 0, 0, 0, 0)).accepted());
+    for (int k = 0; k < 19; ++k) {
+      const fact::FilterResult r = f.push(sample(0.1 * k, 2, 0, 0, 1));
+      EXPECT_EQ(r.rejection, fact::Rejection::out_of_order) << k;
+      EXPECT_FALSE(r.restarted);
+    }
+    const fact::FilterResult r = f.push(sample(1.9, 2, 0, 0, 1));
+    ASSERT_TRUE(r.accepted()) << r.detail;
+    EXPECT_TRUE(r.restarted);
+    EXPECT_EQ(r.output.seq, 0);
+    EXPECT_EQ(r.output.utime, 1900000);
+    EXPECT_EQ(r.output.yaw, 1);
+    EXPECT_NE(r.detail.find("stream restarted after 20 samples"), std::string::npos) << r.detail;
+    const fact::FilterResult next = f.push(sample(2.0, 2, 0, 0, 1));
+    ASSERT_TRUE(next.accepted()) << next.detail;
+    EXPECT_FALSE(next.restarted);
+    EXPECT_EQ(next.output.seq, 1);
+  }
+}
+
 TEST(OdometryFilter, RejectsTimesBeyondInt64) {
   fact::OdometryFilter f;
   const fact::FilterResult r = f.push(sample(1e16, 0, 0, 0, 0));  // 1e22 µs

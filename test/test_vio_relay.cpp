@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -400,6 +401,21 @@ TEST_F(VioRelayTest, HelpExitsZeroAndDocumentsTheLineFormat) {
                            "--input-channel", "--output-channel", "--lcm-url", "--drone-id", "t tx ty tz qx qy qz qw",
                            "Hamilton", "rejected_nan"})
     EXPECT_NE(out.find(what), std::string::npos) << what << "\n" << out;
+}
+
+// A typo'd far-future time in a file replayed in real time put the relay to sleep for decades
+// (review, session 30): now that line is rejected as a jump and not waited for.
+TEST_F(VioRelayTest, FarFutureLineOfAReplayIsRejectedNotWaitedFor) {
+  const fs::path file = dir_ / "typo.tum";
+  {
+    std::ofstream out(file);
+    for (const char* t : {"0", "0.01", "1e9", "0.02", "0.03"}) out << t << " 0 0 1 0 0 0 1\n";
+  }
+  Relay relay({"--source", "tum", "--file", file.string(), "--rate", "1", "--lcm-url", "memq://"}, dir_, "typo");
+  ASSERT_EQ(relay.wait(), 0) << relay.err();
+  const std::string log = relay.err();
+  EXPECT_NE(log.find("time gap of"), std::string::npos) << log;
+  EXPECT_NE(log.find("published 4, rejected_jump 1"), std::string::npos) << log;
 }
 
 TEST_F(VioRelayTest, BadFlagsExitTwoWithTheReason) {

@@ -100,9 +100,12 @@ void add_flags(CLI::App& app, Options& o) {
       "--restamp adds one offset to every time (the first sample's arrival minus its own time).\n"
       "Rejected, counted and logged (at most one line per reason per second): NaN/inf fields\n"
       "(rejected_nan), time not strictly increasing (rejected_out_of_order), position or yaw jumps\n"
-      "faster than --max-speed/--max-yaw-rate since the last published sample (rejected_jump),\n"
-      "unusable quaternions (rejected_attitude), malformed lines (rejected_malformed), times beyond\n"
-      "int64 us (rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id).\n"
+      "faster than --max-speed/--max-yaw-rate or more than 10 s after the last published sample\n"
+      "(rejected_jump), positions beyond 10 km (rejected_range), unusable quaternions\n"
+      "(rejected_attitude), malformed lines (rejected_malformed), times beyond int64 us\n"
+      "(rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id). After 20\n"
+      "out-of-order or jump rejections in a row the stream restarts from the next sample (seq 0,\n"
+      "counted as restarts).\n"
       "Counters go out on the status channel as fact::app_status_t.\n"
       "--rate 0 publishes as fast as LCM goes: a subscriber keeps every sample only with a queue\n"
       "capacity above LCM's default of 30 messages per subscription.\n"
@@ -159,13 +162,15 @@ class Relay {
     // Every counter from the start, so that a reader sees zeros rather than missing names.
     status_.count("published", 0);
     for (fact::Rejection r : {fact::Rejection::non_finite, fact::Rejection::out_of_order, fact::Rejection::jump,
-                              fact::Rejection::bad_attitude, fact::Rejection::malformed, fact::Rejection::bad_time})
+                              fact::Rejection::bad_attitude, fact::Rejection::malformed, fact::Rejection::bad_time,
+                              fact::Rejection::out_of_range})
       status_.count(fact::counter_name(r), 0);
     if (options.source == "lcm") {
       status_.count("undecodable", 0);
       status_.count("wrong_drone_id", 0);
     }
     status_.count("publish_failed", 0);
+    status_.count("restarts", 0);
   }
 
   const fact::app::Log& log() const { return log_; }
@@ -234,7 +239,8 @@ class Relay {
     std::ostringstream s;
     s << "published " << status_.value("published");
     for (const char* name : {"rejected_nan", "rejected_out_of_order", "rejected_jump", "rejected_attitude",
-                             "rejected_malformed", "rejected_time", "undecodable", "wrong_drone_id"})
+                             "rejected_malformed", "rejected_time", "rejected_range", "undecodable", "wrong_drone_id",
+                             "restarts"})
       if (status_.value(name) > 0) s << ", " << name << " " << status_.value(name);
     return s.str();
   }
@@ -265,6 +271,10 @@ class Relay {
       return;
     }
     status_.count("published");
+    if (r.restarted) {
+      status_.count("restarts");
+      log_.event(where + ": " + r.detail + "; publishing from utime " + std::to_string(m.utime) + " us with seq 0");
+    }
     if (r.output.seq == 0) {
       std::ostringstream s;
       s << "first sample published on " << options_.output_channel << ": utime " << m.utime << " us, position ("
@@ -308,6 +318,7 @@ int run_tum(std::ifstream& file, const Options& o, Relay& relay) {
   const auto start = std::chrono::steady_clock::now();
   bool has_first = false;
   double first_time = 0;  // s, the first finite sample time in the file
+  double waited_time = 0;  // s, the latest sample time waited for
   std::string text;
   int64_t line_no = 0;
   while (!fact::app::stop_requested() && std::getline(file, text)) {
@@ -318,14 +329,18 @@ int run_tum(std::ifstream& file, const Options& o, Relay& relay) {
       if (fact::parse_pose_line(text, &line, &error) == fact::PoseLineKind::sample && std::isfinite(line.time)) {
         if (!has_first) {
           has_first = true;
-          first_time = line.time;
+          first_time = waited_time = line.time;
         }
-        // A sample before the first, or beyond ~100 years of replay, is not waited for.
+        // A sample before the first, or more than the filter's max_gap after the previous one (a
+        // far-future typo, which the filter rejects as a jump: it had put the relay to sleep for
+        // decades, review session 30), is not waited for.
         const double offset_s = (line.time - first_time) / o.rate;
-        if (offset_s > 0 && offset_s < 3e9)
+        if (offset_s > 0 && line.time - waited_time <= o.filter.max_gap) {
+          waited_time = std::max(waited_time, line.time);
           wait_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                  std::chrono::duration<double>(offset_s)),
                      relay);
+        }
         if (fact::app::stop_requested()) break;
       }
     }

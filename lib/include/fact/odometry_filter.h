@@ -57,13 +57,17 @@ enum class Rejection {
   jump,          // faster than max_speed or max_yaw_rate        "rejected_jump"
   bad_attitude,  // unusable quaternion (see attitude_from_…)    "rejected_attitude"
   malformed,     // a pose line that does not parse              "rejected_malformed"
+  out_of_range,  // |position| beyond max_position               "rejected_range"
 };
-constexpr int kNumRejections = 7;
+constexpr int kNumRejections = 8;
 const char* counter_name(Rejection r);  // the names above; "published" for none
 
 struct OdometryFilterOptions {
   double max_speed = 10;     // m/s: a position change faster than this is a jump
   double max_yaw_rate = 6;   // rad/s: a yaw change faster than this is a jump
+  double max_position = 1e4;  // m: a position component beyond ± this is out_of_range (the first sample's too)
+  double max_gap = 10;       // s: a sample this long after the last accepted one is a jump (a far-future time)
+  int restart_after = 20;    // consecutive out_of_order or jump rejections after which the stream restarts
 };
 
 // A raw sample.
@@ -95,16 +99,21 @@ struct FilterResult {
   bool empty = false;  // a blank or comment line: no sample, nothing published or counted
   std::string detail;  // why, with the values, e.g. "speed 52.1 m/s > max 10 m/s over 0.1 s"
   OdometryOutput output;  // valid when accepted()
+  bool restarted = false;  // accepted as a new start after restart_after rejections in a row
   bool accepted() const { return rejection == Rejection::none && !empty; }
 };
 
 // The normaliser of one drone's stream. Every check compares against the last *accepted* sample,
-// so a single outlier never poisons the stream, and a real discontinuity (a VIO reset) is
-// accepted again once enough time has passed for it to be within the limits.
+// so a single outlier never poisons the stream.
 //   - any non-finite field → non_finite; utime beyond ±9.2e18 µs → bad_time;
+//   - a position component beyond ±max_position → out_of_range (the first sample too);
 //   - utime (rounded to whole µs) ≤ the last accepted → out_of_order (duplicates included);
-//   - |Δposition| / Δt > max_speed, or |wrap(Δyaw)| / Δt > max_yaw_rate → jump;
+//   - Δt > max_gap, |Δposition| / Δt > max_speed, or |wrap(Δyaw)| / Δt > max_yaw_rate → jump;
 //   - otherwise published: yaw unwrapped, seq + 1, velocity as above.
+// After restart_after out_of_order or jump rejections in a row the stream restarts: the sample is
+// published as a first one (seq 0, its own yaw; restarted), so that a VIO whose clock or frame was
+// reset, or one accepted sample with a wrong far-future time, cannot block the stream for good
+// (review, session 30: each did).
 class OdometryFilter {
  public:
   explicit OdometryFilter(OdometryFilterOptions options = {});
@@ -124,11 +133,14 @@ class OdometryFilter {
 
  private:
   FilterResult reject(Rejection r, std::string detail);
+  // Why a sample at `utime` (after the last accepted) is a jump from it, or "".
+  std::string jump_from_last(const OdometryInput& in, int64_t utime) const;
 
   OdometryFilterOptions options_;
   std::array<int64_t, kNumRejections> counts_{};
   bool has_last_ = false;
   OdometryOutput last_;
+  int consecutive_ = 0;  // out_of_order and jump rejections since the last accepted sample
 };
 
 // The raw sample of a pose line (time s → µs, attitude from the quaternion, no velocity). Returns
