@@ -85,6 +85,12 @@ class World {
   Vector3d pos = Vector3d::Zero();
   double yaw = 0.3;
   bool odometry_on = true;
+  int64_t odometry_offset_us = 0;  // added to the odometry's utime (a VIO clock that started over)
+  // The odometry stream restarts, as fact-vio-relay's does: seq 0, times shifted by offset_us.
+  void restart_odometry(int64_t offset_us) {
+    seq_ = 0;
+    odometry_offset_us = offset_us;
+  }
   std::vector<std::pair<int64_t, fact::setpoint_t>> setpoints;  // (arrival, message)
   std::string state;                                            // newest status state of fact-planner 0
   fact::app_status_t status;
@@ -177,7 +183,7 @@ class World {
     if (odometry_on && now - last_odometry_ >= 20000) {
       last_odometry_ = now;
       fact::odometry_t m{};
-      m.utime = now;
+      m.utime = now + odometry_offset_us;
       m.drone_id = 0;
       m.seq = seq_++;
       for (int k = 0; k < 3; ++k) m.position[k] = pos[k];
@@ -428,6 +434,22 @@ TEST_F(PlannerApp, WaitTimeoutMovesTowardFarthestObserved) {
   EXPECT_NE(err.find("no result for round 0"), std::string::npos);
   EXPECT_GE(counter(w.status, "wait_timeouts"), 1);
   EXPECT_NE(err.find("exit: --max-rounds reached"), std::string::npos);
+}
+
+// The odometry stream restarts (seq 0, its times an hour earlier), as fact-vio-relay's does after
+// a VIO clock reset: the planner follows it instead of rejecting every later sample as out of
+// order and hovering on stale odometry (review, session 30).
+TEST_F(PlannerApp, FollowsAnOdometryRestart) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({});
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state;
+  w.restart_odometry(-3600000000);
+  w.run_for(std::chrono::milliseconds(1500));
+  EXPECT_EQ(counter(w.status, "odometry_restarts"), 1);
+  EXPECT_EQ(counter(w.status, "out_of_order"), 0);
+  EXPECT_EQ(counter(w.status, "hover"), 0) << w.state;
+  EXPECT_EQ(p.stop(), 0);
 }
 
 TEST_F(PlannerApp, BadFlagsExit2) {

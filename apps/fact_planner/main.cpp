@@ -167,6 +167,7 @@ class PoseBuffer {
     while (samples_.size() > 1000) samples_.pop_front();
   }
   bool empty() const { return samples_.empty(); }
+  void clear() { samples_.clear(); }
   const Pose& newest() const { return samples_.back(); }
   // Interpolated at t; false when t is outside the buffer by more than `slack_us`.
   bool at(int64_t t, int64_t slack_us, Pose* out) const {
@@ -237,7 +238,7 @@ class Planner {
     status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
     for (const char* c : {"odometry", "detections", "observations", "frames", "frames_mapped", "frames_without_detections",
                           "swarm_rounds", "results", "setpoints", "rejected_setpoint", "rejected_nan", "rejected_range",
-                          "wrong_drone_id",
+                          "wrong_drone_id", "odometry_restarts",
                           "out_of_order", "invalid_input", "undecodable", "no_odometry_at_time", "map_failed", "plans",
                           "hover", "wait_timeouts", "publish_failed"})
       status_.count(c, 0);
@@ -258,6 +259,15 @@ class Planner {
       return reject("rejected_nan", "odometry seq " + std::to_string(m.seq) + " has a non-finite field");
     if (std::string why = odometry_out_of_range(m); !why.empty())
       return reject("rejected_range", "odometry seq " + std::to_string(m.seq) + ": " + why);
+    // seq 0 after other samples: fact-vio-relay restarted its stream (or was restarted), and its
+    // times may start over. The buffer starts again with it; otherwise every later sample was out
+    // of order and the drone hovered on stale odometry for good (review, session 30).
+    if (m.seq == 0 && !poses_.empty()) {
+      status_.count("odometry_restarts");
+      log_.event("odometry restarted (seq 0 at utime " + std::to_string(m.utime) + " us, the last was " +
+                 std::to_string(poses_.newest().utime) + " us): the pose buffer starts again");
+      poses_.clear();
+    }
     if (!poses_.empty() && m.utime <= poses_.newest().utime)
       return reject("out_of_order", "odometry utime " + std::to_string(m.utime) + " not after the previous one");
     status_.count("odometry");
