@@ -22,6 +22,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <string>
@@ -451,6 +452,47 @@ TEST_F(PlannerApp, FollowsAnOdometryRestart) {
   EXPECT_EQ(counter(w.status, "hover"), 0) << w.state;
   EXPECT_EQ(p.stop(), 0);
 }
+
+#ifdef FACT_CLOCK_SHIFT_LIBRARY
+// fact-planner's wall clock steps back an hour during the takeoff, then forward two: the setpoint
+// stream goes on without a gap or a jump (review, session 30: with intervals on the wall clock a
+// step back stopped the setpoints for the hour, a step forward cut a move or spin short with a
+// jump). The steps are made by clock_shift.c, preloaded into the planner alone.
+TEST_F(PlannerApp, WallClockStepsNeitherStopNorJumpTheSetpoints) {
+  const fs::path shift = dir_ / "clock_shift";
+  auto step_clock = [&](const char* seconds) { std::ofstream(shift) << seconds << "\n"; };
+  step_clock("0");
+  World w;
+  ASSERT_TRUE(w.good());
+  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
+  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
+  Process& p = start({});
+  ::unsetenv("LD_PRELOAD");
+  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state;
+  w.run_for(std::chrono::milliseconds(300));
+  const size_t first = w.setpoints.size();
+  step_clock("-3600");
+  w.run_for(std::chrono::milliseconds(800));
+  step_clock("3600");
+  w.run_for(std::chrono::milliseconds(1200));
+  ASSERT_GT(w.setpoints.size(), first + 40) << "the setpoints stopped at a wall-clock step";
+  double longest_gap_s = 0, largest_step_m = 0, largest_yaw_step = 0;
+  for (size_t i = first; i + 1 < w.setpoints.size(); ++i) {
+    const auto& [t0, a] = w.setpoints[i];
+    const auto& [t1, b] = w.setpoints[i + 1];
+    longest_gap_s = std::max(longest_gap_s, (t1 - t0) * 1e-6);
+    largest_step_m = std::max(largest_step_m, (Vector3d(b.position[0], b.position[1], b.position[2]) -
+                                               Vector3d(a.position[0], a.position[1], a.position[2])).norm());
+    largest_yaw_step = std::max(largest_yaw_step, std::abs(b.yaw - a.yaw));
+  }
+  EXPECT_LT(longest_gap_s, 0.2);
+  EXPECT_LT(largest_step_m, 0.15);  // v_max 2 m/s at 30 setpoints/s: at most 0.07 m
+  EXPECT_LT(largest_yaw_step, 0.5);  // spin rate 6 rad/s: at most 0.2 rad
+  EXPECT_EQ(counter(w.status, "hover"), 0) << w.state;
+  EXPECT_EQ(p.stop(), 0);
+}
+#endif
 
 TEST_F(PlannerApp, BadFlagsExit2) {
   {

@@ -318,16 +318,16 @@ int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> ever
 }
 
 int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every,
-                      const std::vector<lcm::LCM*>& more) {
+                      const std::vector<lcm::LCM*>& more, int64_t (*clock)()) {
   const std::vector<lcm::LCM*> all = loop_instances(lcm, more);
   if (all.empty()) return 1;
-  int64_t deadline = every(now_us());
+  int64_t deadline = every(clock());
   while (!stop_requested()) {
-    int64_t wait = std::clamp<int64_t>(deadline - now_us(), 0, max_wait_us);
+    int64_t wait = std::clamp<int64_t>(deadline - clock(), 0, max_wait_us);
     const int r = wait_and_handle(all, wait);
     if (r == 1) return 1;
     if (r == 2) break;
-    deadline = every(now_us());
+    deadline = every(clock());
   }
   return 0;
 }

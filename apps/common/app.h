@@ -192,8 +192,11 @@ int run_loop(lcm::LCM& lcm, int period_ms, std::function<void(int64_t now)> ever
 // deadline (at most max_wait_us) with microsecond resolution, handling messages as they come, so
 // a deadline is met as closely as the scheduler allows rather than on a polling grid. Under the
 // simulation clock the wait needs no cap: simulated time moves only when a tick arrives on a
-// polled socket, and that ends the wait. `more` as in run_loop.
+// polled socket, and that ends the wait. `more` as in run_loop. `clock` is the time every() gets
+// and its deadlines are on: now_us, or monotonic_us for a schedule that a wall-clock step must not
+// stall or cut short (fact-planner).
 int run_deadline_loop(lcm::LCM& lcm, int64_t max_wait_us, std::function<int64_t(int64_t now)> every,
-                      const std::vector<lcm::LCM*>& more = {});
+                      const std::vector<lcm::LCM*>& more = {},
+                      int64_t (*clock)() = &now_us);
 
 }  // namespace fact::app

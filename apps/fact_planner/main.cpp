@@ -272,7 +272,7 @@ class Planner {
       return reject("out_of_order", "odometry utime " + std::to_string(m.utime) + " not after the previous one");
     status_.count("odometry");
     poses_.push(Pose{m.utime, Vector3d(m.position[0], m.position[1], m.position[2]), m.yaw, m.pitch, m.roll});
-    odometry_arrival_ = fact::app::now_us();
+    odometry_arrival_ = fact::app::monotonic_us();
   }
 
   void on_detections(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
@@ -313,7 +313,7 @@ class Planner {
     if (m->width <= 0 || m->height <= 0 || m->depth_size != n || m->gray_size != n)
       return reject("invalid_input", "frame seq " + std::to_string(m->seq) + ": sizes do not match width x height");
     status_.count("frames");
-    frames_.push_back({m, fact::app::now_us()});
+    frames_.push_back({m, fact::app::monotonic_us()});
     while (frames_.size() > 4) {  // never fall behind: the oldest is mapped with what is known
       map_frame(*frames_.front().frame);
       frames_.pop_front();
@@ -359,7 +359,12 @@ class Planner {
 
   // ---- the loop --------------------------------------------------------------------------------
   // Runs after every wait: maps frames, steps the state machine, publishes a setpoint when due.
-  // Returns -1 to keep running, else the exit code.
+  // Returns -1 to keep running, else the exit code. `now` is fact::app::monotonic_us(): every
+  // interval (trajectory time, the setpoint deadline, odometry staleness, waits, the spin slot)
+  // is a difference on it, so a wall-clock step neither stops the stream nor cuts a move or spin
+  // short (review, session 30: a step back of an hour stopped the setpoints, a step forward
+  // ended a spin with a 4.4 rad yaw jump). Messages keep now_us() stamps, and every drone's spin
+  // slot is a delay from the same gossip and result messages, so the swarm stays in step.
   int every(int64_t now) {
     while (!frames_.empty() && (boxes_.count(frames_.front().frame->utime) ||
                                 now - frames_.front().arrival >= us(o_.frame_wait))) {
@@ -372,7 +377,7 @@ class Planner {
       const int64_t period = us(1.0 / o_.setpoint_rate);
       next_setpoint_ = now - next_setpoint_ > period ? now + period : next_setpoint_ + period;
     }
-    status_.tick(now);
+    status_.tick(fact::app::now_us());  // (the status message carries wall or simulation time)
     if (o_.exit_when_done && phase_ == Phase::done && now - done_since_ >= 1000000 && hold_published_) {
       log_.event(certified_ ? "exit: certified hold published for 1 s" : "exit: --max-rounds reached, not certified");
       return certified_ ? 0 : 3;
@@ -380,7 +385,7 @@ class Planner {
     return -1;
   }
 
-  // When the next setpoint is due (µs, now_us() clock): the main loop wakes for it.
+  // When the next setpoint is due (µs, monotonic_us() clock): the main loop wakes for it.
   int64_t next_deadline() const { return next_setpoint_; }
 
   void final_status() {
@@ -646,7 +651,7 @@ class Planner {
       s.yaw_rate = 0;
     }
     fact::setpoint_t m;
-    m.utime = now;
+    m.utime = fact::app::now_us();  // (the message's stamp: wall or simulation time; `now` is monotonic)
     m.drone_id = o_.common.drone_id;
     for (int i = 0; i < 3; ++i) {
       m.position[i] = s.position[i];
@@ -733,7 +738,7 @@ int main(int argc, char** argv) {
       fact::app::request_stop();
     }
     return planner.next_deadline();
-  }, {frames_lcm.get()});
+  }, {frames_lcm.get()}, &fact::app::monotonic_us);
   planner.final_status();
   log.event(code != 0 ? "stopped: LCM failed" : "stopped");
   return code != 0 ? 1 : exit_code >= 0 ? exit_code : 0;
