@@ -22,6 +22,7 @@ if(TARGET fact-fc-bridge)
     FACT_NETNS_RUN="${PROJECT_SOURCE_DIR}/scripts/netns-run.sh")
   target_link_libraries(fact_fc_bridge_tests PRIVATE fact_app_common fact_mavlink fact_lcmtypes GTest::gtest)
   add_dependencies(fact_fc_bridge_tests fact-fc-bridge)
+  fact_use_clock_shift(fact_fc_bridge_tests)
   fact_discover_tests(fact_fc_bridge_tests 30)
 
   # Independent decoder: node-mavlink 2.3.0 (npm, installed into the build folder by the script)

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <string>
@@ -256,6 +257,43 @@ TEST(FcBridge, StreamingStopsOnStaleSetpointOrLostHeartbeatAndResumes) {
   }
   (void)t0;
 }
+
+#ifdef FACT_CLOCK_SHIFT_LIBRARY
+// The bridge's wall clock steps back an hour while it streams (clock_shift.c, preloaded into the
+// bridge alone), then the planner dies: the stream goes on through the step and still stops once
+// the setpoint is stale (review, session 30: with the stop rules on the wall clock the step
+// stopped the stream for the hour, and a dead planner's setpoint would have streamed on).
+TEST(FcBridge, WallClockStepNeitherStopsTheStreamNorKeepsAStaleSetpoint) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15141, 15140);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  const fact::test::TempFile shift("fc-bridge-clock");
+  std::ofstream(shift.path()) << "0\n";
+  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.path().c_str(), 1);
+  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
+  Process bridge(bridge_args(15140, 15141, {"--setpoint-timeout", "0.3"}));
+  ::unsetenv("LD_PRELOAD");
+  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
+  double next_hb = 0, next_sp = 0;
+  bool send_sp = true;
+  auto every = [&](double t) {
+    if (t >= next_hb) fc.heartbeat(), next_hb = t + 0.1;
+    if (send_sp && t >= next_sp) publish_sp(side, setpoint(1, 2, 3)), next_sp = t + 0.05;
+  };
+  run_for(0.6, fc, side, every);
+  std::ofstream(shift.path()) << "-3600\n";
+  const double stepped = now_s();
+  run_for(0.8, fc, side, every);
+  EXPECT_GE(fc.count(84, stepped + 0.2, now_s()), 10) << "streaming stopped at the step";
+  send_sp = false;  // the planner dies
+  const double died = now_s();
+  run_for(1.0, fc, side, every);
+  EXPECT_EQ(fc.count(84, died + 0.3 + 0.12, now_s()), 0) << "a dead planner's setpoint streams on";
+  EXPECT_EQ(bridge.stop(), 0);
+}
+#endif
 
 TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
   ASSERT_TRUE(only_loopback());
