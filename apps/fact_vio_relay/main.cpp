@@ -82,7 +82,7 @@ void add_flags(CLI::App& app, Options& o) {
       ->capture_default_str();
   app.add_option("--port", o.port, "udp source: UDP port to listen on (1-65535)")->type_name("PORT");
   app.add_option("--bind", o.bind, "udp source: IPv4 address to listen on")->type_name("ADDR")->capture_default_str();
-  app.add_flag("--restamp", o.restamp, "tum/udp sources: shift sample times so the first is the wall clock");
+  app.add_flag("--restamp", o.restamp, "tum (at --rate 1) / udp sources: shift sample times so the first is the wall clock");
   app.add_option("--max-speed", o.filter.max_speed, "Reject a position change faster than this (m/s, > 0)")
       ->type_name("M/S")
       ->capture_default_str();
@@ -138,8 +138,16 @@ void check(const CLI::App& app, Options& o) {
   check_positive("--max-yaw-rate", o.filter.max_yaw_rate);
   if (o.source == "tum") {
     if (o.file.empty()) throw FlagError("--source tum needs --file FILE");
-    if (!(std::isfinite(o.rate) && o.rate >= 0))
-      throw FlagError("--rate: expected a finite number >= 0 (0 = as fast as possible), got " + std::to_string(o.rate));
+    // (a rate of 1e-12 stretched every gap beyond the longest wait and silently replayed as fast
+    // as possible; restamped times keep the file's intervals, so only real time keeps them on the
+    // wall clock that the detector's stamps follow: review, session 30)
+    std::ostringstream rate;
+    rate << o.rate;
+    if (!(std::isfinite(o.rate) && (o.rate == 0 || (o.rate >= 0.01 && o.rate <= 1000))))
+      throw FlagError("--rate: expected 0 (as fast as possible) or a number in [0.01, 1000], got " + rate.str());
+    if (o.restamp && o.rate != 1)
+      throw FlagError("--restamp with --source tum needs --rate 1 (real time): at --rate " + rate.str() +
+                      " the restamped times would drift from the wall clock");
   }
   if (o.source == "udp") {
     if (o.port < 1 || o.port > 65535) throw FlagError("--source udp needs --port in 1-65535, got " + std::to_string(o.port));
