@@ -437,6 +437,35 @@ TEST_F(PlannerApp, WaitTimeoutMovesTowardFarthestObserved) {
   EXPECT_NE(err.find("exit: --max-rounds reached"), std::string::npos);
 }
 
+// Odometry goes stale in the middle of the takeoff climb: the hover brakes within --a-max to rest
+// instead of asking for a stop in one setpoint (review, session 30: |Δv| 0.76 m/s mid-move), and
+// the takeoff resumes when the odometry is back.
+TEST_F(PlannerApp, HoverBrakesWithinTheAccelerationLimit) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({});
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state;
+  w.run_for(std::chrono::milliseconds(350));
+  const fact::setpoint_t climbing = w.setpoints.back().second;
+  ASSERT_GT(climbing.velocity[2], 0.5) << "not climbing yet";
+  const size_t first = w.setpoints.size() - 1;
+  w.odometry_on = false;
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "hover: odometry stale"); }, std::chrono::seconds(3))) << w.state;
+  w.run_for(std::chrono::milliseconds(800));
+  double largest_dv = 0;
+  for (size_t i = first; i + 1 < w.setpoints.size(); ++i) {
+    const fact::setpoint_t& a = w.setpoints[i].second;
+    const fact::setpoint_t& b = w.setpoints[i + 1].second;
+    largest_dv = std::max(largest_dv, std::abs(b.velocity[2] - a.velocity[2]));
+  }
+  EXPECT_LT(largest_dv, 0.3);  // --a-max 6 m/s² at 30 setpoints/s: 0.2 m/s a setpoint
+  EXPECT_NEAR(w.setpoints.back().second.velocity[2], 0.0, 1e-9) << "the hover ends at rest";
+  w.odometry_on = true;
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "spin round 0"); }, std::chrono::seconds(5))) << w.state;
+  EXPECT_EQ(counter(w.status, "hover"), 1);
+  EXPECT_EQ(p.stop(), 0);
+}
+
 // The odometry stream restarts (seq 0, its times an hour earlier), as fact-vio-relay's does after
 // a VIO clock reset: the planner follows it instead of rejecting every later sample as out of
 // order and hovering on stale odometry (review, session 30).

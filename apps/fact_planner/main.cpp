@@ -539,6 +539,7 @@ class Planner {
         hovering_ = true;
         status_.count("hover");
         hover_phase_end_ = trajectory_.sample(1e9);
+        brake(now);
       }
       std::ostringstream s;
       s << "hover: odometry stale (none for more than " << o_.odometry_timeout << " s) in " << phase_state_;
@@ -617,6 +618,26 @@ class Planner {
     set_state(plan_hover_.empty() ? phase_state_ : plan_hover_ + " (" + phase_state_ + ")");
   }
 
+  // Entering a hover: from the last setpoint (position, velocity, acceleration) to rest within
+  // v_max and a_max, at the braking distance |v|²/(2 a_max) ahead; the yaw stays. Freezing the
+  // last commanded point at rest asked for a stop in one setpoint (|Δv| 0.76 m/s mid-move:
+  // review, session 30). Without a smooth stop (limits already exceeded) it holds the point.
+  void brake(int64_t now) {
+    fact::TrajectoryStart start;
+    start.position = last_.position;
+    start.velocity = last_.velocity;
+    start.acceleration = last_.acceleration;
+    start.yaw = last_.yaw;
+    const double speed = last_.velocity.norm();
+    const Vector3d stop = last_.position + last_.velocity * (speed / (2 * o_.planner.a_max));
+    const fact::TrajectoryLimits limits{o_.planner.v_max, o_.planner.a_max, 0.02};
+    hover_trajectory_ = fact::hold_trajectory(last_.position, last_.yaw);
+    if (speed > 1e-3 && !fact::min_jerk_within_limits(start, stop, limits, &hover_trajectory_).empty())
+      hover_trajectory_ = fact::hold_trajectory(last_.position, last_.yaw);
+    hover_trajectory_.yaw = fact::YawProfile{last_.yaw, 0, o_.planner.spin_rate, o_.planner.yaw_accel};
+    hover_start_ = now;
+  }
+
   // After a hover: the rest of the interrupted trajectory, from the hover point at rest to its end
   // position and end yaw (a straight segment of the original straight path; the yaw ramp's rest).
   void resume(int64_t now) {
@@ -635,9 +656,9 @@ class Planner {
 
   void publish_setpoint(int64_t now) {
     if (poses_.empty()) return;
-    fact::TrajectorySample s = last_;
-    if (!hovering_) s = trajectory_.sample((now - trajectory_start_) * 1e-6);
-    if (hovering_ || !plan_hover_.empty()) {
+    fact::TrajectorySample s = hovering_ ? hover_trajectory_.sample((now - hover_start_) * 1e-6)
+                                         : trajectory_.sample((now - trajectory_start_) * 1e-6);
+    if (!plan_hover_.empty()) {
       s.velocity.setZero();
       s.acceleration.setZero();
       s.yaw_rate = 0;
@@ -698,6 +719,8 @@ class Planner {
   int64_t trajectory_start_ = 0, next_setpoint_ = 0, hover_until_ = 0, done_since_ = 0;
   int64_t spin_not_before_ = 0;  // the synchronised spin starts no earlier (fact::move_slot, fact::takeoff_slot)
   fact::TrajectorySample last_, hover_phase_end_;  // the last published setpoint; the interrupted trajectory's end
+  fact::Trajectory hover_trajectory_;                // the stop a hover flies (brake), from hover_start_
+  int64_t hover_start_ = 0;
   bool hovering_ = false, certified_ = false, hold_published_ = false;
 };
 
