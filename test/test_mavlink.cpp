@@ -392,12 +392,16 @@ TEST(MavlinkParser, FalseStartWithAnUnknownIdDoesNotSwallowTheFramesBehindIt) {
   const std::size_t claimed_end = 2 + 10 + 60 + 2;  // the false start's header, payload and CRC
   ASSERT_LT(claimed_end, stream.size());
   ASSERT_NE(stream[claimed_end], mav::kStx);  // (so the claimed frame is not followed by a start byte)
-  mav::Parser p;
-  auto c = parse(p, stream);
-  ASSERT_EQ(c.frames.size(), 4u);
-  for (std::size_t i = 0; i < c.frames.size(); ++i) EXPECT_EQ(c.frames[i].seq, i);
-  ASSERT_GE(c.rejections.size(), 1u);
-  EXPECT_EQ(c.rejections[0].reason, mav::Reject::unknown_id);
+  // In one piece and byte by byte (a serial line): the held bytes then end exactly where the false
+  // start's claimed length does, which the first version of the fix took for a real frame's end.
+  for (std::size_t chunk : {stream.size(), std::size_t{1}, std::size_t{2}, std::size_t{5}}) {
+    mav::Parser p;
+    auto c = parse(p, stream, chunk);
+    ASSERT_EQ(c.frames.size(), 4u) << "chunk " << chunk;
+    for (std::size_t i = 0; i < c.frames.size(); ++i) EXPECT_EQ(c.frames[i].seq, i);
+    ASSERT_GE(c.rejections.size(), 1u);
+    EXPECT_EQ(c.rejections[0].reason, mav::Reject::unknown_id);
+  }
 }
 
 // One bit flipped in a frame's incompat byte makes it "signed": 13 more bytes, into the next frame.
@@ -407,13 +411,15 @@ TEST(MavlinkParser, FlippedSigningFlagDoesNotSwallowTheNextFrame) {
   stream[2] = mav::kIncompatSigned;
   for (const auto& next : {enc.encode(sample_setpoint()), enc.encode(mav::Heartbeat{})})
     stream.insert(stream.end(), next.begin(), next.end());
-  mav::Parser p;
-  auto c = parse(p, stream);
-  ASSERT_EQ(c.frames.size(), 2u);
-  EXPECT_EQ(c.frames[0].msgid, mav::SetPositionTargetLocalNed::kId);
-  EXPECT_EQ(c.frames[1].msgid, 0u);
-  ASSERT_GE(c.rejections.size(), 1u);
-  EXPECT_EQ(c.rejections[0].reason, mav::Reject::signed_frame);
+  for (std::size_t chunk : {stream.size(), std::size_t{1}, std::size_t{3}}) {
+    mav::Parser p;
+    auto c = parse(p, stream, chunk);
+    ASSERT_EQ(c.frames.size(), 2u) << "chunk " << chunk;
+    EXPECT_EQ(c.frames[0].msgid, mav::SetPositionTargetLocalNed::kId);
+    EXPECT_EQ(c.frames[1].msgid, 0u);
+    ASSERT_GE(c.rejections.size(), 1u);
+    EXPECT_EQ(c.rejections[0].reason, mav::Reject::signed_frame);
+  }
 }
 
 TEST(MavlinkParser, UnknownIncompatFlagIsRejected) {

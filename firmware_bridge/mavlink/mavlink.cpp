@@ -283,8 +283,7 @@ void Parser::reject(Reject r, uint32_t msgid, std::string detail, std::size_t sk
 }
 
 std::size_t Parser::unverified_skip(std::size_t total) const {
-  const std::size_t end = start_ + total;
-  return end == buffer_.size() || buffer_[end] == kStx ? total : 1;
+  return buffer_[start_ + total] == kStx ? total : 1;  // (take_one holds total + 1 bytes)
 }
 
 bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reject) {
@@ -306,12 +305,16 @@ bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reje
   const bool is_signed = (incompat & kIncompatSigned) != 0;
   const std::size_t total = kHeaderLength + len + kCrcLength + (is_signed ? kSignatureLength : 0);
   if (available < total) return false;
+  const MessageInfo* m = message_info(msgid);
+  // A frame that cannot be verified waits for the byte after it (unverified_skip reads it): the
+  // bytes held may end where a false start's claimed length does, one byte at a time on a serial
+  // line (review, session 30).
+  if ((is_signed || m == nullptr) && available < total + 1) return false;
   if (is_signed) {
     reject(Reject::signed_frame, msgid, "signed frame (" + describe(msgid) + "): signing is not supported",
            unverified_skip(total), on_reject);
     return true;
   }
-  const MessageInfo* m = message_info(msgid);
   if (m == nullptr) {
     reject(Reject::unknown_id, msgid, "unknown msgid " + std::to_string(msgid) + " (no CRC_EXTRA to check it)",
            unverified_skip(total), on_reject);

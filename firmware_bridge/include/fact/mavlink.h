@@ -235,9 +235,10 @@ struct Rejection {
 // is skipped (counted in skipped_bytes()). After a bad CRC or unknown incompat flags the parser
 // drops only the start byte and searches again (the frame may have been a false start inside
 // garbage); a frame whose CRC holds but whose payload is too long is skipped whole. A frame it
-// cannot verify (an unknown id: no CRC_EXTRA; a signed frame) is skipped whole only when another
-// start byte follows it or it ends the bytes held, as a real frame does; otherwise only its start
-// byte goes, since a false start claiming up to 280 bytes would swallow the good frames behind it.
+// cannot verify (an unknown id: no CRC_EXTRA; a signed frame) waits for the byte after it and is
+// skipped whole only when that is another start byte, as after a real frame; otherwise only its
+// start byte goes, since a false start claiming up to 280 bytes would swallow the good frames
+// behind it. (So an unverifiable frame that ends the stream stays buffered until more bytes come.)
 class Parser {
  public:
   using FrameHandler = std::function<void(const Frame&)>;
@@ -256,7 +257,7 @@ class Parser {
   // Tries to take one frame at start_; false when more bytes are needed.
   bool take_one(const FrameHandler& on_frame, const RejectHandler& on_reject);
   void reject(Reject r, uint32_t msgid, std::string detail, std::size_t skip, const RejectHandler& on_reject);
-  // Bytes to skip for an unverifiable frame of `total` bytes at start_: total or 1 (see above).
+  // Bytes to skip for an unverifiable frame of `total` bytes at start_ (total + 1 held): total or 1.
   std::size_t unverified_skip(std::size_t total) const;
 
   std::vector<uint8_t> buffer_;
