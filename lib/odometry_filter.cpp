@@ -178,11 +178,19 @@ FilterResult OdometryFilter::push(const OdometryInput& in) {
       kind = Rejection::out_of_order;
       why = "utime " + std::to_string(out.utime) + " us is not after the last accepted " + std::to_string(last_.utime) + " us";
     } else {
-      why = jump_from_last(in, out.utime);
+      why = jump_between(Anchor{last_.utime, last_.position, last_.yaw}, in, out.utime);
       if (!why.empty()) kind = Rejection::jump;
     }
     if (kind != Rejection::none) {
-      if (++consecutive_ < options_.restart_after) return reject(kind, why);
+      // A run of rejected samples counts toward a restart only while each is a consistent
+      // continuation of the one before (a stream of its own): a frozen VIO repeating one sample, or
+      // scattered outliers, never restart the stream (review, session 30).
+      const Anchor here{out.utime, in.position, in.yaw};
+      const bool continues = has_candidate_ && out.utime > candidate_.utime && jump_between(candidate_, in, out.utime).empty();
+      consecutive_ = continues ? consecutive_ + 1 : 1;
+      candidate_ = here;
+      has_candidate_ = true;
+      if (consecutive_ < options_.restart_after) return reject(kind, why);
       restarted = true;
     }
   }
@@ -197,6 +205,7 @@ FilterResult OdometryFilter::push(const OdometryInput& in) {
     out.seq = last_.seq + 1;
   }
   consecutive_ = 0;
+  has_candidate_ = false;
   ++counts_[static_cast<int>(Rejection::none)];
   has_last_ = true;
   last_ = out;
@@ -204,21 +213,22 @@ FilterResult OdometryFilter::push(const OdometryInput& in) {
   result.output = out;
   result.restarted = restarted;
   if (restarted)
-    result.detail = "stream restarted after " + std::to_string(options_.restart_after) +
-                    " samples in a row were out of order or jumps";
+    result.detail = "stream restarted: " + std::to_string(options_.restart_after) +
+                    " samples in a row, each consistent with the one before, were out of order or jumps from the last "
+                    "accepted";
   return result;
 }
 
-std::string OdometryFilter::jump_from_last(const OdometryInput& in, int64_t utime) const {
-  const double dt = static_cast<double>(utime - last_.utime) / 1e6;  // s, > 0
+std::string OdometryFilter::jump_between(const Anchor& from, const OdometryInput& in, int64_t utime) const {
+  const double dt = static_cast<double>(utime - from.utime) / 1e6;  // s, > 0
   if (dt > options_.max_gap)
     return "time gap of " + number(dt) + " s after the last accepted sample (max " + number(options_.max_gap) + " s)";
-  const Eigen::Vector3d step = in.position - last_.position;
+  const Eigen::Vector3d step = in.position - from.position;
   const double speed = step.norm() / dt;
   if (!(speed <= options_.max_speed))
     return "position jump of " + number(step.norm()) + " m in " + number(dt) + " s (" + number(speed) + " m/s > max " +
            number(options_.max_speed) + " m/s)";
-  const double dyaw = wrap_angle(in.yaw - last_.yaw);
+  const double dyaw = wrap_angle(in.yaw - from.yaw);
   const double yaw_rate = std::abs(dyaw) / dt;
   if (!(yaw_rate <= options_.max_yaw_rate))
     return "yaw jump of " + number(dyaw) + " rad in " + number(dt) + " s (" + number(yaw_rate) + " rad/s > max " +

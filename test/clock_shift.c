@@ -1,8 +1,9 @@
 // LD_PRELOAD shim for tests: the wall clock (CLOCK_REALTIME and its coarse variant) of the process
 // it is preloaded into runs shifted by the number of seconds written in the file named by
 // FACT_CLOCK_SHIFT_FILE (0 while the file is missing or unreadable; re-read at most every 5 ms of
-// the steady clock). The steady clock is not touched. test_planner_app.cpp steps fact-planner's
-// wall clock by an hour in flight with it.
+// the steady clock). The steady clock is not touched. test_planner_app.cpp and test_fc_bridge.cpp
+// step an app's wall clock by an hour with it. A test shim only: its statics are not synchronised
+// and it reads a file inside clock_gettime, fine for the single-threaded apps it is preloaded into.
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <stdio.h>

@@ -327,11 +327,20 @@ TEST(OdometryFilter, OneBadSampleNeverBlocksTheStream) {
     EXPECT_EQ(r.output.seq, 0);
     EXPECT_EQ(r.output.utime, 1900000);
     EXPECT_EQ(r.output.yaw, 1);
-    EXPECT_NE(r.detail.find("stream restarted after 20 samples"), std::string::npos) << r.detail;
+    EXPECT_NE(r.detail.find("stream restarted: 20 samples in a row"), std::string::npos) << r.detail;
     const fact::FilterResult next = f.push(sample(2.0, 2, 0, 0, 1));
     ASSERT_TRUE(next.accepted()) << next.detail;
     EXPECT_FALSE(next.restarted);
     EXPECT_EQ(next.output.seq, 1);
+  }
+  {  // a frozen VIO repeating its last sample, and scattered outliers, never restart it (review,
+     // session 30: the first version republished a frozen pose as a new stream every 20 samples)
+    fact::OdometryFilter f;
+    ASSERT_TRUE(f.push(sample(1.0, 0, 0, 0, 0)).accepted());
+    for (int k = 0; k < 60; ++k) EXPECT_FALSE(f.push(sample(1.0, 0, 0, 0, 0)).accepted()) << k;
+    for (int k = 0; k < 60; ++k)
+      EXPECT_FALSE(f.push(sample(1.1 + 0.1 * k, k % 2 ? 500.0 + 100 * k : -500.0 - 100 * k, 0, 0, 0)).accepted()) << k;
+    EXPECT_EQ(f.count(fact::Rejection::none), 1);
   }
 }
 

@@ -88,8 +88,8 @@ class World {
   bool odometry_on = true;
   int64_t odometry_offset_us = 0;  // added to the odometry's utime (a VIO clock that started over)
   // The odometry stream restarts, as fact-vio-relay's does: seq 0, times shifted by offset_us.
-  void restart_odometry(int64_t offset_us) {
-    seq_ = 0;
+  void restart_odometry(int64_t offset_us, int64_t first_seq = 0) {
+    seq_ = first_seq;
     odometry_offset_us = offset_us;
   }
   std::vector<std::pair<int64_t, fact::setpoint_t>> setpoints;  // (arrival, message)
@@ -475,8 +475,13 @@ TEST_F(PlannerApp, FollowsAnOdometryRestart) {
   Process& p = start({});
   ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state;
   w.restart_odometry(-3600000000);
-  w.run_for(std::chrono::milliseconds(1500));
+  w.run_for(std::chrono::milliseconds(1000));
   EXPECT_EQ(counter(w.status, "odometry_restarts"), 1);
+  // Again, with the restart's first samples (seq 0 … 4) lost on the way: a seq that goes back is
+  // a restart too.
+  w.restart_odometry(-7200000000, 5);
+  w.run_for(std::chrono::milliseconds(1000));
+  EXPECT_EQ(counter(w.status, "odometry_restarts"), 2);
   EXPECT_EQ(counter(w.status, "out_of_order"), 0);
   EXPECT_EQ(counter(w.status, "hover"), 0) << w.state;
   EXPECT_EQ(p.stop(), 0);

@@ -418,6 +418,25 @@ TEST_F(VioRelayTest, FarFutureLineOfAReplayIsRejectedNotWaitedFor) {
   EXPECT_NE(log.find("published 4, rejected_jump 1"), std::string::npos) << log;
 }
 
+// A 10.7 s pause in a file replayed in real time: the lines after it are paced again from there
+// (review, session 30: the first fix replayed everything after a pause at once), and the filter
+// restarts the stream once over the gap.
+TEST_F(VioRelayTest, ReplayAfterAPauseIsPacedAgain) {
+  const fs::path file = dir_ / "pause.tum";
+  {
+    std::ofstream out(file);
+    for (int k = 0; k <= 30; ++k) out << 0.0 + k / 30.0 << " 0 0 1 0 0 0 1\n";
+    for (int k = 0; k <= 60; ++k) out << 12.0 + k / 30.0 << " 0 0 1 0 0 0 1\n";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  Relay relay({"--source", "tum", "--file", file.string(), "--rate", "1", "--lcm-url", "memq://"}, dir_, "pause");
+  ASSERT_EQ(relay.wait(), 0) << relay.err();
+  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GT(took_s, 2.8) << "the 2 s after the pause were not paced";
+  EXPECT_LT(took_s, fact::test::scaled_s(8.0)) << "the pause itself was waited for";
+  EXPECT_NE(relay.err().find("restarts 1"), std::string::npos) << relay.err();
+}
+
 TEST_F(VioRelayTest, BadFlagsExitTwoWithTheReason) {
   const std::string missing = (dir_ / "no-such.tum").string();
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {

@@ -259,19 +259,23 @@ class Planner {
       return reject("rejected_nan", "odometry seq " + std::to_string(m.seq) + " has a non-finite field");
     if (std::string why = odometry_out_of_range(m); !why.empty())
       return reject("rejected_range", "odometry seq " + std::to_string(m.seq) + ": " + why);
-    // seq 0 after other samples: fact-vio-relay restarted its stream (or was restarted), and its
-    // times may start over. The buffer starts again with it; otherwise every later sample was out
-    // of order and the drone hovered on stale odometry for good (review, session 30).
-    if (m.seq == 0 && !poses_.empty()) {
+    // seq going back: fact-vio-relay restarted its stream (seq 0) or was restarted, and its times
+    // may start over. The buffer starts again with it; otherwise every later sample was out of
+    // order and the drone hovered on stale odometry for good (review, session 30). (Not only seq 0:
+    // that one message may be lost; and seq 0 again with an earlier time when the restart came
+    // right after the first sample.)
+    if (!poses_.empty() && (m.seq < last_seq_ || (m.seq == 0 && m.utime < poses_.newest().utime))) {
       status_.count("odometry_restarts");
-      log_.event("odometry restarted (seq 0 at utime " + std::to_string(m.utime) + " us, the last was " +
-                 std::to_string(poses_.newest().utime) + " us): the pose buffer starts again");
+      log_.event("odometry restarted (seq " + std::to_string(m.seq) + " after " + std::to_string(last_seq_) + ", utime " +
+                 std::to_string(m.utime) + " us after " + std::to_string(poses_.newest().utime) +
+                 " us): the pose buffer starts again");
       poses_.clear();
     }
     if (!poses_.empty() && m.utime <= poses_.newest().utime)
       return reject("out_of_order", "odometry utime " + std::to_string(m.utime) + " not after the previous one");
     status_.count("odometry");
     poses_.push(Pose{m.utime, Vector3d(m.position[0], m.position[1], m.position[2]), m.yaw, m.pitch, m.roll});
+    last_seq_ = m.seq;
     odometry_arrival_ = fact::app::monotonic_us();
   }
 
@@ -721,6 +725,7 @@ class Planner {
   fact::TrajectorySample last_, hover_phase_end_;  // the last published setpoint; the interrupted trajectory's end
   fact::Trajectory hover_trajectory_;                // the stop a hover flies (brake), from hover_start_
   int64_t hover_start_ = 0;
+  int64_t last_seq_ = 0;  // the newest accepted odometry's seq
   bool hovering_ = false, certified_ = false, hold_published_ = false;
 };
 

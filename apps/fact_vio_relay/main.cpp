@@ -103,9 +103,10 @@ void add_flags(CLI::App& app, Options& o) {
       "faster than --max-speed/--max-yaw-rate or more than 10 s after the last published sample\n"
       "(rejected_jump), positions beyond 10 km (rejected_range), unusable quaternions\n"
       "(rejected_attitude), malformed lines (rejected_malformed), times beyond int64 us\n"
-      "(rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id). After 20\n"
-      "out-of-order or jump rejections in a row the stream restarts from the next sample (seq 0,\n"
-      "counted as restarts).\n"
+      "(rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id). When 20\n"
+      "samples in a row are out of order or jumps but each follows the one before within the\n"
+      "limits (a VIO whose clock or frame was reset), the 20th restarts the stream (seq 0,\n"
+      "counted as restarts); a replay re-bases its pace after a gap over 10 s.\n"
       "Counters go out on the status channel as fact::app_status_t.\n"
       "--rate 0 publishes as fast as LCM goes: a subscriber keeps every sample only with a queue\n"
       "capacity above LCM's default of 30 messages per subscription.\n"
@@ -323,10 +324,10 @@ void wait_until(std::chrono::steady_clock::time_point target, Relay& relay) {
 int run_tum(std::ifstream& file, const Options& o, Relay& relay) {
   relay.status().set_state("replaying " + o.file);
   relay.status().publish(fact::app::now_us());
-  const auto start = std::chrono::steady_clock::now();
+  auto base_clock = std::chrono::steady_clock::now();  // when the line at base_time is due
   bool has_first = false;
-  double first_time = 0;  // s, the first finite sample time in the file
-  double waited_time = 0;  // s, the latest sample time waited for
+  double base_time = 0;      // s, the file time the schedule counts from
+  double previous_time = 0;  // s, the previous sample line's time
   std::string text;
   int64_t line_no = 0;
   while (!fact::app::stop_requested() && std::getline(file, text)) {
@@ -337,18 +338,21 @@ int run_tum(std::ifstream& file, const Options& o, Relay& relay) {
       if (fact::parse_pose_line(text, &line, &error) == fact::PoseLineKind::sample && std::isfinite(line.time)) {
         if (!has_first) {
           has_first = true;
-          first_time = waited_time = line.time;
+          base_time = previous_time = line.time;
         }
-        // A sample before the first, or more than the filter's max_gap after the previous one (a
-        // far-future typo, which the filter rejects as a jump: it had put the relay to sleep for
-        // decades, review session 30), is not waited for.
-        const double offset_s = (line.time - first_time) / o.rate;
-        if (offset_s > 0 && line.time - waited_time <= o.filter.max_gap) {
-          waited_time = std::max(waited_time, line.time);
-          wait_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                 std::chrono::duration<double>(offset_s)),
-                     relay);
+        // Time going back, or a gap beyond the filter's max_gap (a far-future typo, a pause, a
+        // restarted clock), re-bases the schedule at this line instead of being waited for, and the
+        // replay goes on paced from there (review, session 30: a typo had put the relay to sleep for
+        // decades, and a first fix left every line after a real pause unpaced).
+        const double gap = line.time - previous_time;
+        if (gap < 0 || gap > o.filter.max_gap) {
+          base_time = line.time;
+          base_clock = std::chrono::steady_clock::now();
         }
+        previous_time = line.time;
+        wait_until(base_clock + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>((line.time - base_time) / o.rate)),
+                   relay);
         if (fact::app::stop_requested()) break;
       }
     }

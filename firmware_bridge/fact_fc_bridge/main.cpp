@@ -54,7 +54,8 @@ struct Options {
 void add_flags(CLI::App& app, Options& o) {
   o.common.drone_id = 0;
   fact::app::add_common_flags(app, &o.common, fact::app::DroneIdFlag::optional);
-  app.add_option("--udp", o.udp, "MAVLink over UDP: bind LOCAL_PORT, send to REMOTE_HOST:REMOTE_PORT (PX4 SITL: 14540:127.0.0.1:14580)")
+  app.add_option("--udp", o.udp, "MAVLink over UDP: bind LOCAL_PORT, send to REMOTE_HOST:REMOTE_PORT (PX4 SITL: 14540:127.0.0.1:14580); "
+                 "only datagrams from REMOTE_HOST:REMOTE_PORT are read (others: foreign_datagrams)")
       ->type_name("LOCAL_PORT:REMOTE_HOST:REMOTE_PORT");
   app.add_option("--serial", o.serial, "MAVLink over a serial port (raw 8N1)")->type_name("DEVICE");
   app.add_option("--baud", o.baud, "Serial rate in bit/s (" + fact::bridge::supported_bauds() + ")")->capture_default_str();

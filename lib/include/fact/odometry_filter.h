@@ -67,7 +67,7 @@ struct OdometryFilterOptions {
   double max_yaw_rate = 6;   // rad/s: a yaw change faster than this is a jump
   double max_position = 1e4;  // m: a position component beyond ± this is out_of_range (the first sample's too)
   double max_gap = 10;       // s: a sample this long after the last accepted one is a jump (a far-future time)
-  int restart_after = 20;    // consecutive out_of_order or jump rejections after which the stream restarts
+  int restart_after = 20;    // a consistent run of this many rejected samples restarts the stream (see below)
 };
 
 // A raw sample.
@@ -110,10 +110,12 @@ struct FilterResult {
 //   - utime (rounded to whole µs) ≤ the last accepted → out_of_order (duplicates included);
 //   - Δt > max_gap, |Δposition| / Δt > max_speed, or |wrap(Δyaw)| / Δt > max_yaw_rate → jump;
 //   - otherwise published: yaw unwrapped, seq + 1, velocity as above.
-// After restart_after out_of_order or jump rejections in a row the stream restarts: the sample is
-// published as a first one (seq 0, its own yaw; restarted), so that a VIO whose clock or frame was
-// reset, or one accepted sample with a wrong far-future time, cannot block the stream for good
-// (review, session 30: each did).
+// When restart_after samples in a row are rejected as out_of_order or jump but each is a
+// consistent continuation of the one before (later, within max_gap, max_speed and max_yaw_rate of
+// it), the last of them restarts the stream: it is published as a first sample (seq 0, its own
+// yaw; restarted), so that a VIO whose clock or frame was reset cannot block the stream for good
+// (review, session 30: it did). A frozen VIO repeating one sample, or scattered outliers, never
+// restart it.
 class OdometryFilter {
  public:
   explicit OdometryFilter(OdometryFilterOptions options = {});
@@ -133,14 +135,21 @@ class OdometryFilter {
 
  private:
   FilterResult reject(Rejection r, std::string detail);
-  // Why a sample at `utime` (after the last accepted) is a jump from it, or "".
-  std::string jump_from_last(const OdometryInput& in, int64_t utime) const;
+  struct Anchor {  // a sample's time (µs), position (m, f_i) and yaw (rad)
+    int64_t utime = 0;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    double yaw = 0;
+  };
+  // Why a sample at `utime` (after from.utime) is a jump from `from`, or "".
+  std::string jump_between(const Anchor& from, const OdometryInput& in, int64_t utime) const;
 
   OdometryFilterOptions options_;
   std::array<int64_t, kNumRejections> counts_{};
   bool has_last_ = false;
   OdometryOutput last_;
-  int consecutive_ = 0;  // out_of_order and jump rejections since the last accepted sample
+  int consecutive_ = 0;  // the run of rejected samples, each consistent with the one before
+  bool has_candidate_ = false;
+  Anchor candidate_;     // the last sample of that run
 };
 
 // The raw sample of a pose line (time s → µs, attitude from the quaternion, no velocity). Returns
