@@ -195,6 +195,24 @@ TEST(PlannerRules, TargetTowardTheFarthestObservedDrone) {
   EXPECT_NE(plan.reason.find("farthest observed"), std::string::npos) << plan.reason;
 }
 
+// The farthest drone lies beyond the fence's edge: the move turns away rather than leaving the
+// fence (the planner had no x/y limit; fact-fc-bridge then rejected the setpoints and the stream
+// stopped: review, session 30).
+TEST(PlannerRules, MovesStayInsideTheFence) {
+  fact::PlannerParams p;
+  p.random_move_probability = 0;
+  p.fence = {-2, 2, -2, 2};
+  fact::PlannerInput in = input_at(Vector3d(1.5, 0, 1.5));
+  in.observed = {Vector3d(6, 0, 1.5), Vector3d(0.5, -0.2, 1.5)};
+  const fact::Plan plan = fact::plan_step(in, {}, p);
+  ASSERT_EQ(plan.kind, fact::PlanKind::move) << plan.reason;
+  EXPECT_LE(plan.target.x(), 2 - p.drone_radius + 1e-9) << plan.reason;
+  EXPECT_GE(plan.target.x(), -2 + p.drone_radius - 1e-9);
+  EXPECT_LE(std::abs(plan.target.y()), 2 - p.drone_radius + 1e-9);
+  p.fence = {-1, 1, 0, 0.3};  // narrower than the drone
+  EXPECT_NE(fact::planner_params_error(p).find("fence[3]"), std::string::npos) << fact::planner_params_error(p);
+}
+
 TEST(PlannerRules, RandomDirectionWithItsProbability) {
   fact::PlannerParams p;
   p.random_move_probability = 0.1;

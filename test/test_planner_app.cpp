@@ -549,7 +549,8 @@ TEST_F(PlannerApp, BadFlagsExit2) {
       {{"--odometry-timeout", "1e-9"}, "--odometry-timeout: expected a number in [0.01, 60] s, got 1e-09"},
       {{"--wait-timeout", "1e300"}, "--wait-timeout: expected a number in [0.01, 3600] s, got 1e+300"},
       {{"--v-max", "1e9"}, "v_max"},
-      {{"--spin-rate", "1e-12"}, "spin_rate"}};
+      {{"--spin-rate", "1e-12"}, "spin_rate"},
+      {{"--fence", "-1,1,0,0.3"}, "fence[3]"}};
   for (const auto& [flags, message] : absurd) {
     std::vector<std::string> words = {FACT_PLANNER_BINARY, "--drone-id", "0"};
     words.insert(words.end(), flags.begin(), flags.end());

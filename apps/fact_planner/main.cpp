@@ -59,6 +59,7 @@ struct Options {
   int max_rounds = 20;               // spins before giving up on a certified result (hold)
   bool exit_when_done = false;
   std::vector<double> camera_offset = {0.10, 0.0, 0.0};  // m, optical centre in the body frame (FLU)
+  std::vector<double> fence = {-50, 50, -50, 50};        // m, f_i: XMIN, XMAX, YMIN, YMAX (PlannerParams::fence)
   double camera_pitch = 0.0;         // rad, camera tilted down about the body y axis
   fact::PlannerParams planner;
   fact::LocalMapParams map;
@@ -91,6 +92,9 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--camera-offset", o.camera_offset, "Camera optical centre in the body frame x,y,z (m, FLU)")
       ->delimiter(',')->expected(3)->type_name("X,Y,Z");
   num("--camera-pitch", o.camera_pitch, "Camera tilted down about the body y axis (rad)");
+  app.add_option("--fence", o.fence,
+                 "Moves stay inside this box, drone_radius from its edges (m, f_i; within fact-fc-bridge's --geofence)")
+      ->delimiter(',')->expected(4)->type_name("XMIN,XMAX,YMIN,YMAX")->capture_default_str();
   fact::PlannerParams& p = o.planner;
   num("--takeoff-min", p.takeoff_min, "Takeoff height drawn in [min, max] (m, f_i)");
   num("--takeoff-max", p.takeoff_max, "Takeoff height drawn in [min, max] (m, f_i)");
@@ -149,6 +153,7 @@ void check(Options& o) {
   for (double c : o.camera_offset)
     if (!std::isfinite(c)) throw FlagError("--camera-offset: expected finite numbers");
   if (!std::isfinite(o.camera_pitch)) throw FlagError("--camera-pitch: expected a finite number");
+  for (int k = 0; k < 4; ++k) o.planner.fence[static_cast<std::size_t>(k)] = o.fence[static_cast<std::size_t>(k)];
   if (std::string e = fact::planner_params_error(o.planner); !e.empty()) throw FlagError("planner: " + e);
   if (std::string e = fact::local_map_params_error(o.map); !e.empty()) throw FlagError("map: " + e);
 }

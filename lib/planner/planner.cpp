@@ -69,6 +69,10 @@ std::string planner_params_error(const PlannerParams& p) {
   if (!within(p.v_max, 0.01, 20)) return bad("v_max", p.v_max);
   if (!within(p.a_max, 0.01, 50)) return bad("a_max", p.a_max);
   if (!within(p.move_settle, 0, 60)) return bad("move_settle", p.move_settle);
+  for (int k = 0; k < 4; ++k)
+    if (!within(p.fence[k], -1e6, 1e6)) return bad(k < 2 ? "fence (x)" : "fence (y)", p.fence[k]);
+  if (!(p.fence[1] - p.fence[0] > 2 * p.drone_radius)) return bad("fence[1] (XMAX)", p.fence[1]);
+  if (!(p.fence[3] - p.fence[2] > 2 * p.drone_radius)) return bad("fence[3] (YMAX)", p.fence[3]);
   if (!std::isfinite(p.takeoff_min) || p.takeoff_min < 0) return bad("takeoff_min", p.takeoff_min);
   if (!std::isfinite(p.takeoff_max) || p.takeoff_max < p.takeoff_min) return bad("takeoff_max", p.takeoff_max);
   if (!pos(p.spin_rate)) return bad("spin_rate", p.spin_rate);
@@ -349,6 +353,9 @@ Plan plan_step(const PlannerInput& in, const std::vector<ObstacleBox>& pieces, c
         problem = "target " + num(target.x()) + ", " + num(target.y()) + " could not be pushed out of the obstacles";
       } else if (pushed.z() < p.z_min - 1e-9 || pushed.z() > p.z_max + 1e-9) {
         problem = "pushed target leaves the height window";
+      } else if (pushed.x() < p.fence[0] + p.drone_radius || pushed.x() > p.fence[1] - p.drone_radius ||
+                 pushed.y() < p.fence[2] + p.drone_radius || pushed.y() > p.fence[3] - p.drone_radius) {
+        problem = "target " + num(pushed.x()) + ", " + num(pushed.y()) + " leaves the fence";
       } else if ((pushed - in.position).norm() > cap * (1 + 1e-9)) {
         problem = "pushed target leaves the max-move ball";
       } else if ((pushed - in.position).norm() < p.min_useful_move) {

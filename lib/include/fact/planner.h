@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,11 @@ struct PlannerParams {
   // it (see "mutual visibility" above: keep it the takeoff window).
   double z_min = 1.2;              // m
   double z_max = 1.6;              // m
+  // Horizontal fence in f_i, m: XMIN, XMAX, YMIN, YMAX. Move targets stay inside it by
+  // drone_radius (paths are straight, so the whole move does). Keep it within fact-fc-bridge's
+  // --geofence, whose default box it is: the bridge rejects a setpoint outside its fence, and the
+  // stream, and so the flight, then stops (review, session 30: the planner had no x/y limit).
+  std::array<double, 4> fence{-50, 50, -50, 50};
   // Trajectory limits and collision checks.
   double v_max = 0.8;              // m/s
   double a_max = 1.0;              // m/s²
