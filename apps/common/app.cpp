@@ -127,6 +127,12 @@ void Status::set_state(const std::string& s) { state_ = s; }
 void Status::note(const std::string& message) { message_ = message; }
 void Status::set_period_us(int64_t period_us) { period_us_ = period_us > 0 ? period_us : 1; }
 
+void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line) {
+  status.count(counter);
+  const int64_t n = status.value(counter);
+  if (n <= 10 || n % 100 == 0) log.event(line + " (" + counter + " = " + std::to_string(n) + ")");
+}
+
 void Status::tick(int64_t now) {
   // (now before the last publication: the wall clock was set back; publishing again re-bases the
   // period instead of going quiet until the clock catches up)

@@ -153,6 +153,10 @@ std::string decode_error(const void* data, int size, T* msg) {
   }
 }
 
+// Counts one event on `counter` and logs "<line> (<counter> = <total>)": the first 10, then every
+// 100th, so that a flood of bad input cannot flood the log.
+void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line);
+
 // Decodes a received message; on failure (truncated, foreign fingerprint, garbage counts) counts
 // "undecodable" on status (when given), logs the channel, the byte count and the reason, and
 // returns false. Never throws. To keep a flood of garbage from flooding the log, with a status

@@ -627,6 +627,18 @@ class Planner {
     set_state(plan_hover_.empty() ? phase_state_ : plan_hover_ + " (" + phase_state_ + ")");
   }
 
+  // A min-jerk trajectory from `start` to rest at `target` within v_max and a_max when `move`,
+  // held at start's position instead when it is not worth a move or the limits cannot be kept
+  // (start already beyond them); the yaw turns by `turn` from start.yaw at the spin's rate limits.
+  fact::Trajectory to_rest(const fact::TrajectoryStart& start, const Vector3d& target, bool move, double turn) const {
+    const fact::TrajectoryLimits limits{o_.planner.v_max, o_.planner.a_max, 0.02};
+    fact::Trajectory t = fact::hold_trajectory(start.position, start.yaw);
+    if (move && !fact::min_jerk_within_limits(start, target, limits, &t).empty())
+      t = fact::hold_trajectory(start.position, start.yaw);
+    t.yaw = fact::YawProfile{start.yaw, turn, o_.planner.spin_rate, o_.planner.yaw_accel};
+    return t;
+  }
+
   // Entering a hover: from the last setpoint (position, velocity, acceleration) to rest within
   // v_max and a_max, at the braking distance |v|²/(2 a_max) ahead; the yaw stays. Freezing the
   // last commanded point at rest asked for a stop in one setpoint (|Δv| 0.76 m/s mid-move:
@@ -639,26 +651,19 @@ class Planner {
     start.yaw = last_.yaw;
     const double speed = last_.velocity.norm();
     const Vector3d stop = last_.position + last_.velocity * (speed / (2 * o_.planner.a_max));
-    const fact::TrajectoryLimits limits{o_.planner.v_max, o_.planner.a_max, 0.02};
-    hover_trajectory_ = fact::hold_trajectory(last_.position, last_.yaw);
-    if (speed > 1e-3 && !fact::min_jerk_within_limits(start, stop, limits, &hover_trajectory_).empty())
-      hover_trajectory_ = fact::hold_trajectory(last_.position, last_.yaw);
-    hover_trajectory_.yaw = fact::YawProfile{last_.yaw, 0, o_.planner.spin_rate, o_.planner.yaw_accel};
+    hover_trajectory_ = to_rest(start, stop, speed > 1e-3, 0);
     hover_start_ = now;
   }
 
   // After a hover: the rest of the interrupted trajectory, from the hover point at rest to its end
   // position and end yaw (a straight segment of the original straight path; the yaw ramp's rest).
   void resume(int64_t now) {
-    fact::Trajectory t = fact::hold_trajectory(last_.position, last_.yaw);
     fact::TrajectoryStart start;
     start.position = last_.position;
     start.yaw = last_.yaw;
-    fact::TrajectoryLimits limits{o_.planner.v_max, o_.planner.a_max, 0.02};
-    if ((hover_phase_end_.position - last_.position).norm() > 1e-3 &&
-        !fact::min_jerk_within_limits(start, hover_phase_end_.position, limits, &t).empty())
-      t = fact::hold_trajectory(last_.position, last_.yaw);
-    t.yaw = fact::YawProfile{last_.yaw, hover_phase_end_.yaw - last_.yaw, o_.planner.spin_rate, o_.planner.yaw_accel};
+    const fact::Trajectory t = to_rest(start, hover_phase_end_.position,
+                                       (hover_phase_end_.position - last_.position).norm() > 1e-3,
+                                       hover_phase_end_.yaw - last_.yaw);
     fly(t, now);
     log_.event("odometry back: resuming " + std::string(name(phase_)) + " to " + fmt(hover_phase_end_.position));
   }

@@ -101,10 +101,8 @@ uint32_t Bridge::boot_ms(int64_t now) const {
 
 // Counts a rejection and logs it: the first 10 of each kind, then every 100th.
 void Bridge::reject(const std::string& counter, const std::string& why) {
-  status_->count(counter);
   status_->note(why);
-  const int64_t n = status_->value(counter);
-  if (n <= 10 || n % 100 == 0) log_.event("rejected: " + why + " (" + counter + " = " + std::to_string(n) + ")");
+  app::count_and_log(*status_, log_, counter, "rejected: " + why);
 }
 
 // ------------------------------------------------------------------------------- LCM input

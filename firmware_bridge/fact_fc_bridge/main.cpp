@@ -171,14 +171,6 @@ fact::bridge::BridgeOptions check(Options& o) {
   return b;
 }
 
-// Counts an event on FACT_STATUS and logs it: the first 10, then every 100th.
-void count_and_log(fact::app::Status& status, const fact::app::Log& log, const std::string& counter,
-                   const std::string& what) {
-  status.count(counter);
-  const int64_t n = status.value(counter);
-  if (n <= 10 || n % 100 == 0) log.event(what + " (" + counter + " = " + std::to_string(n) + ")");
-}
-
 // The LCM side: decodes inputs and hands them to the bridge.
 class Inputs {
  public:
@@ -229,7 +221,8 @@ int run(lcm::LCM& lcm, fact::bridge::Link& link, fact::bridge::Bridge& bridge, f
         return 1;
       }
       if (got > 0) bridge.on_fc_bytes(buf.data(), static_cast<std::size_t>(got), fact::app::monotonic_us());
-      if (const std::string ignored = link.take_ignored(); !ignored.empty()) count_and_log(status, log, "foreign_datagrams", ignored);
+      if (const std::string ignored = link.take_ignored(); !ignored.empty())
+        fact::app::count_and_log(status, log, "foreign_datagrams", ignored);
     }
   }
   return 0;
@@ -273,9 +266,10 @@ int main(int argc, char** argv) {
   status.set_period_us(std::llround(options.common.status_period * 1e6));
   auto send = [&](const std::vector<uint8_t>& bytes) {
     std::string error;
-    if (!link->send(bytes, &error)) count_and_log(status, log, "send_failed", "send failed: " + error);
+    if (!link->send(bytes, &error)) fact::app::count_and_log(status, log, "send_failed", "send failed: " + error);
     if (dump && (std::fwrite(bytes.data(), 1, bytes.size(), dump) != bytes.size() || std::fflush(dump) != 0))
-      count_and_log(status, log, "dump_failed", "--dump: cannot write to '" + options.dump + "': " + std::strerror(errno));
+      fact::app::count_and_log(status, log, "dump_failed",
+                               "--dump: cannot write to '" + options.dump + "': " + std::strerror(errno));
   };
   auto publish = [&](const fact::fc_state_t& s) {  // stamped on the app clock (the bridge's is monotonic)
     fact::fc_state_t stamped = s;
