@@ -370,10 +370,8 @@ class App {
   }
 
   void reject(const std::string& counter, const std::string& line) {
-    status_.count(counter);
     status_.note(line);
-    const int64_t n = status_.value(counter);
-    if (n <= 10 || n % 100 == 0) log_.event(line + " [" + counter + " " + std::to_string(n) + "]");
+    fact::app::count_and_log(status_, log_, counter, line);
   }
 
   std::string summary() const {

@@ -468,9 +468,7 @@ class Simulator {
 
  private:
   void reject(const std::string& counter, const std::string& line) {
-    status_->count(counter);
-    const int64_t n = status_->value(counter);
-    if (n <= 10 || n % 100 == 0) log_->event(line + " (" + counter + " " + std::to_string(n) + ")");
+    fact::app::count_and_log(*status_, *log_, counter, line);
   }
 
   // Reads every pending MAVLink datagram of every flight controller (non-blocking), at sim time t.

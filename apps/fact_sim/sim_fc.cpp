@@ -39,13 +39,6 @@ std::string address(const sockaddr_in& a) {
   return std::string(host) + ":" + std::to_string(ntohs(a.sin_port));
 }
 
-// Counts and logs a rejection: the first 10 of each counter, then every 100th.
-void count_and_log(app::Status* status, const app::Log& log, const std::string& counter, const std::string& line) {
-  status->count(counter);
-  const int64_t n = status->value(counter);
-  if (n <= 10 || n % 100 == 0) log.event(line + " (" + counter + " " + std::to_string(n) + ")");
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------------------- SimFc
@@ -62,7 +55,7 @@ void SimFc::event(const std::string& line) const { log_->event("drone " + std::t
 
 void SimFc::reject(const std::string& counter, const std::string& why) {
   status_->note(why);
-  count_and_log(status_, *log_, counter, "drone " + std::to_string(id_) + " FC: rejected: " + why);
+  app::count_and_log(*status_, *log_, counter, "drone " + std::to_string(id_) + " FC: rejected: " + why);
 }
 
 uint32_t SimFc::custom_mode() const {
@@ -396,9 +389,9 @@ bool FcPort::drain(const std::function<void(const uint8_t*, std::size_t)>& on_da
       log.event("drone " + std::to_string(drone_id) + " FC: peer " + address(src) + " (first datagram on " + text_ +
                 "); sending to it");
     } else if (src.sin_addr.s_addr != peer_.sin_addr.s_addr || src.sin_port != peer_.sin_port) {
-      count_and_log(status, log, "fc_foreign_peer",
-                    "drone " + std::to_string(drone_id) + " FC: datagram from " + address(src) + " dropped (the peer is " +
-                        address(peer_) + ")");
+      app::count_and_log(*status, log, "fc_foreign_peer",
+                         "drone " + std::to_string(drone_id) + " FC: datagram from " + address(src) + " dropped (the peer is " +
+                             address(peer_) + ")");
       continue;
     }
     on_data(buf_.data(), static_cast<std::size_t>(n));
@@ -410,8 +403,8 @@ void FcPort::send(const std::vector<uint8_t>& bytes, app::Status* status, const 
   if (!have_peer_) return;
   const ssize_t n = ::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&peer_), sizeof peer_);
   if (n != static_cast<ssize_t>(bytes.size()))
-    count_and_log(status, log, "fc_send_failed",
-                  "sendto " + address(peer_) + " from " + text_ + ": " + (n < 0 ? std::strerror(errno) : "short write"));
+    app::count_and_log(*status, log, "fc_send_failed",
+                       "sendto " + address(peer_) + " from " + text_ + ": " + (n < 0 ? std::strerror(errno) : "short write"));
 }
 
 }  // namespace fact::sim_fc
