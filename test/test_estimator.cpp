@@ -207,6 +207,64 @@ TEST(Estimator, DroneOutOfRangeOfEveryoneIsNamedUnresolved) {
   EXPECT_LT(err.yaw, 1e-6);
 }
 
+// The summed modes with a drone that no matched detection connects: the connected drones count as
+// resolved only after the residual and precision checks (they were resolved without them, 2–3 m
+// and up to 3 rad off on these scenarios), and a resolved drone is right whatever the status.
+TEST(Estimator, SummedModesResolveOnlyCheckedDronesWhenOneIsUnconnected) {
+  int partial = 0;  // results with some but not every drone unresolved
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    SimOptions o;
+    o.drones = 4;
+    o.noise = NoiseKind::depth;
+    o.seed = seed;
+    if (seed == 1) {  // a line at equal heights, hovering: drone 1 is hidden behind its neighbours
+      o.rounds = 3;
+      o.formation = Formation::line;
+      o.equal_heights = true;
+      o.move = 0;
+      o.seed = 2;
+    } else {
+      o.rounds = 5;
+      o.false_positives = 1;
+    }
+    const Scenario s = generate_scenario(o);
+    for (Mode mode : {Mode::complex, Mode::paper}) {
+      EstimateOptions eo;
+      eo.mode = mode;
+      const Estimate e = estimate_poses(s.rounds, eo);
+      const Errors err = errors_against_truth(e, s.truth);
+      EXPECT_LT(err.yaw, 0.1) << "seed " << o.seed << " " << to_string(mode) << ": " << e.reason;
+      EXPECT_LT(err.position, 0.3) << "seed " << o.seed << " " << to_string(mode) << ": " << e.reason;
+      if (!e.unresolved.empty() && err.resolved > 1) ++partial;
+    }
+  }
+  std::printf("partially resolved results: %d\n", partial);
+}
+
+// paper and complex modes check min_separation as associated mode does: two drones in one place
+// contradict the poses.
+TEST(Estimator, SummedModesRefuseTwoDronesInOnePlace) {
+  SimOptions o;
+  o.drones = 4;
+  o.rounds = 4;
+  o.noise = NoiseKind::depth;
+  o.seed = 3;
+  const Scenario s = generate_scenario(o);
+  int checked = 0;
+  for (Mode mode : {Mode::complex, Mode::paper}) {
+    EstimateOptions eo;
+    eo.mode = mode;
+    if (!estimate_poses(s.rounds, eo).certified()) continue;  // paper's plain relaxation is not tight here
+    ++checked;
+    eo.min_separation = 50;
+    const Estimate e = estimate_poses(s.rounds, eo);
+    EXPECT_EQ(e.status, EstimateStatus::ambiguous) << to_string(mode);
+    EXPECT_NE(e.reason.find("closer than min_separation 50"), std::string::npos) << e.reason;
+    EXPECT_EQ(e.unresolved.size(), 3u) << e.reason;
+  }
+  EXPECT_GE(checked, 1);
+}
+
 TEST(Estimator, NeverCertifiesWrongWithFalsePositivesMissesAndObstacles) {
   int certified = 0;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
@@ -383,6 +441,14 @@ TEST(EstimatorInput, ZeroVectorReferenceRoundsAndNoise) {
   o = {};
   o.noise.gate = std::nan("");
   expect_invalid(small_rounds(), o, {"noise.gate", "nan"});
+  // A gate whose square overflows (the assignment's no-match cost became +inf and it threw).
+  o.noise.gate = 1e300;
+  expect_invalid(small_rounds(), o, {"noise.gate", "1e+300"});
+  // floor and odometry both tiny: the covariance along a ray would be singular (NaN in the SDP).
+  o = {};
+  o.noise.floor = 1e-200;
+  o.noise.odometry = 0;
+  expect_invalid(small_rounds(), o, {"floor 1e-200 m", "odometry 0 m"});
 }
 
 TEST(EstimatorInput, ReferenceChoiceMovesTheFrame) {

@@ -104,6 +104,8 @@ inline EstimateOptions estimator_options(const EstimatorFlags& f) {
   check("--max-yaw-sigma", o.max_yaw_sigma, true);
   check("--max-position-sigma", o.max_position_sigma, true);
   check("--min-separation", o.min_separation, false);
+  // The flags one by one, then the model as a whole (upper bounds, a σ floor), in the lib's words.
+  if (std::string e = check_noise(n); !e.empty()) throw std::invalid_argument("--noise-* / --gate: " + e);
   o.max_rounds = f.rounds;
   o.window = f.window;
   o.reference = f.reference;

@@ -584,22 +584,6 @@ struct Solution {
   std::vector<Correspondence> correspondences;  // those the translation used
 };
 
-// Two resolved drones closer than min_separation in some round: "" if none.
-std::string final_overlap(const Problem& p, const Solution& s) {
-  for (int k = 0; k < p.rounds(); ++k)
-    for (size_t x = 0; x < s.members.size(); ++x)
-      for (size_t y = x + 1; y < s.members.size(); ++y) {
-        const int a = s.members[x], b = s.members[y];
-        if (!p.views[k][a].present || !p.views[k][b].present) continue;
-        const Eigen::Vector3d pa = yaw_rotation(s.yaw[a]) * p.views[k][a].position + s.translation.t[a];
-        const Eigen::Vector3d pb = yaw_rotation(s.yaw[b]) * p.views[k][b].position + s.translation.t[b];
-        if ((pa - pb).norm() < p.min_separation)
-          return "drones " + std::to_string(p.ids[a]) + " and " + std::to_string(p.ids[b]) + " would be " +
-                 std::to_string((pa - pb).norm()) + " m apart in round " + std::to_string(k);
-      }
-  return "";
-}
-
 // Yaws by certified synchronisation over the component; drops the worst edge that disagrees.
 // Returns false when an edge was dropped (solve again).
 bool synchronise(const Problem& p, std::vector<Edge>* edges, Solution* s, const sdp::Options& o) {
@@ -649,7 +633,7 @@ Solution solve_graph(const Problem& p, const PointSets& points, std::vector<Edge
     if (!synchronise(p, edges, &s, o)) continue;
     if (!s.sdp.certified() || s.sdp.Y.cols() < 2) return s;
     if (!translate(p, points, edges, &s)) continue;
-    s.conflict = final_overlap(p, s);
+    s.conflict = overlap_problem(p, s.members, s.yaw, s.translation.t);
     s.consistent = s.conflict.empty();
     return s;
   }

@@ -129,6 +129,22 @@ bool precise(const Problem& p, const PoseSigma& s) {
          s.position_step <= p.max_position_sigma;
 }
 
+std::string overlap_problem(const Problem& p, const std::vector<int>& members, const std::vector<double>& yaw,
+                            const std::vector<Eigen::Vector3d>& t) {
+  for (int k = 0; k < p.rounds(); ++k)
+    for (size_t x = 0; x < members.size(); ++x)
+      for (size_t y = x + 1; y < members.size(); ++y) {
+        const int a = members[x], b = members[y];
+        if (!p.views[k][a].present || !p.views[k][b].present) continue;
+        const Eigen::Vector3d pa = yaw_rotation(yaw[a]) * p.views[k][a].position + t[a];  // in f_ref, m
+        const Eigen::Vector3d pb = yaw_rotation(yaw[b]) * p.views[k][b].position + t[b];
+        if ((pa - pb).norm() < p.min_separation)
+          return "drones " + std::to_string(p.ids[a]) + " and " + std::to_string(p.ids[b]) + " would be " +
+                 std::to_string((pa - pb).norm()) + " m apart in round " + std::to_string(k);
+      }
+  return "";
+}
+
 std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma) {
   for (size_t i = 0; i < sigma.size(); ++i) {
     if (!(sigma[i].yaw_step <= p.max_yaw_sigma) || !(sigma[i].position_step <= p.max_position_sigma)) {
@@ -169,23 +185,6 @@ Estimate invalid(const Rounds& rounds, const std::string& reason) {
   return e;
 }
 
-std::string check_noise(const NoiseModel& n) {
-  const std::pair<const char*, double> fields[] = {
-      {"floor", n.floor},       {"linear", n.linear},         {"quadratic", n.quadratic}, {"bearing", n.bearing},
-      {"odometry", n.odometry}, {"odometry_yaw", n.odometry_yaw}, {"odometry_walk", n.odometry_walk},
-      {"odometry_yaw_walk", n.odometry_yaw_walk}, {"gate", n.gate}};
-  for (const auto& [name, v] : fields) {
-    if (!std::isfinite(v) || v < 0) {
-      std::ostringstream s;
-      s << "noise." << name << " is " << v << " (must be finite and >= 0)";
-      return s.str();
-    }
-  }
-  if (n.floor <= 0 && n.odometry <= 0)
-    return "noise: floor and odometry are both 0, so a detection's covariance would be singular along its ray";
-  if (n.gate <= 0) return "noise.gate is 0 (must be > 0)";
-  return "";
-}
 
 Estimate run_mode(Mode mode, const estimator::Problem& p, const sdp::Options& o) {
   switch (mode) {
@@ -221,6 +220,35 @@ Estimate run_automatic(const estimator::Problem& p, const sdp::Options& o) {
 }
 
 }  // namespace
+
+std::string check_noise(const NoiseModel& n) {
+  const std::pair<const char*, double> fields[] = {
+      {"floor", n.floor},       {"linear", n.linear},         {"quadratic", n.quadratic}, {"bearing", n.bearing},
+      {"odometry", n.odometry}, {"odometry_yaw", n.odometry_yaw}, {"odometry_walk", n.odometry_walk},
+      {"odometry_yaw_walk", n.odometry_yaw_walk}, {"gate", n.gate}};
+  // Every term is at most kLargestNoise (m, rad, per metre or per √round): squared, and for the
+  // gate multiplied by a squared σ, they stay far from overflow (a gate of 2e154 made the no-match
+  // cost +inf and the assignment threw).
+  constexpr double kLargestNoise = 1e6;
+  for (const auto& [name, v] : fields) {
+    if (!std::isfinite(v) || v < 0 || v > kLargestNoise) {
+      std::ostringstream s;
+      s << "noise." << name << " is " << v << " (must be finite, >= 0 and <= " << kLargestNoise << ")";
+      return s.str();
+    }
+  }
+  // A detection's covariance along its ray is floor² + odometry²: at least kSmallestSigma² so that
+  // its inverse stays finite (a floor of 1e-200 with odometry 0 put NaN into the SDP's cost).
+  constexpr double kSmallestSigma = 1e-6;  // m
+  if (n.floor < kSmallestSigma && n.odometry < kSmallestSigma) {
+    std::ostringstream s;
+    s << "noise: floor " << n.floor << " m and odometry " << n.odometry << " m are both below " << kSmallestSigma
+      << " m, so a detection's covariance would be singular along its ray";
+    return s.str();
+  }
+  if (n.gate <= 0) return "noise.gate is 0 (must be > 0)";
+  return "";
+}
 
 Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options) {
   const auto start = Clock::now();

@@ -95,6 +95,10 @@ std::vector<PoseSigma> pose_uncertainty(int drones, int reference, const std::ve
 bool precise(const Problem& p, const PoseSigma& s);
 // "" when every connected drone's pose is precise enough to certify, else which is not and why.
 std::string precision_problem(const Problem& p, const std::vector<PoseSigma>& sigma);
+// Two of `members` (indices into p.ids) closer than p.min_separation in some round, given the
+// yaws (rad, N) and origins (m, N) of their frames in f_ref: "" if none, else which and where.
+std::string overlap_problem(const Problem& p, const std::vector<int>& members, const std::vector<double>& yaw,
+                            const std::vector<Eigen::Vector3d>& t);
 
 // Fills the certificate fields of an estimate from an SDP result.
 Certificate certificate_of(const sdp::Result& r);

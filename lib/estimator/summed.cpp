@@ -63,6 +63,7 @@ std::vector<std::pair<Ref, Ref>> match_round(const Problem& p, int k, const std:
         cost(r, y) = all[y].drone == i ? INFINITY
                                        : (world[rows[r]] + world[y]).squaredNorm() /
                                              (a.sigma * a.sigma + b.sigma * b.sigma);
+        if (!(cost(r, y) <= gate2)) cost(r, y) = INFINITY;  // beyond the gate: never matched
       }
     const Assignment assignment = solve_assignment(cost, gate2);
     for (size_t r = 0; r < rows.size(); ++r) choice[rows[r]] = assignment.row_to_col[r];
@@ -158,22 +159,36 @@ Estimate estimate_summed(const Problem& p, bool complex, const sdp::Options& sdp
     out.reason = sdp_problem;
     return out;
   }
-  if (!missing.empty()) {
-    out.reason = "no matched detections connect drone(s) " + missing + " to the reference";
-    return out;
-  }
+  // The residual and precision checks run whether or not every drone is connected: a connected
+  // drone counts as resolved only when they pass (returning at a missing drone first left wrong
+  // poses of the connected ones resolved, metres and radians off).
+  std::vector<std::string> problems;
+  if (!missing.empty()) problems.push_back("no matched detections connect drone(s) " + missing + " to the reference");
   if (ts.max_normalised_residual > p.noise.gate) {
-    out.reason = "matched detections disagree with the poses: residual " +
-                 std::to_string(ts.max_normalised_residual) + " sigma > gate " + std::to_string(p.noise.gate);
+    problems.push_back("matched detections disagree with the poses: residual " +
+                       std::to_string(ts.max_normalised_residual) + " sigma > gate " + std::to_string(p.noise.gate));
     for (DronePose& d : out.drones) d.resolved = false;
     out.drones[p.reference].resolved = true;
-    return out;
+  } else {
+    const std::vector<PoseSigma> sigma = pose_uncertainty(p.drones(), p.reference, yaw, ts.t, ts.connected, cs);
+    if (std::string e = precision_problem(p, sigma); !e.empty()) {
+      problems.push_back(e);
+      for (int i = 0; i < p.drones(); ++i)
+        if (!precise(p, sigma[i])) out.drones[i].resolved = false;
+    }
   }
-  const std::vector<PoseSigma> sigma = pose_uncertainty(p.drones(), p.reference, yaw, ts.t, ts.connected, cs);
-  if (std::string e = precision_problem(p, sigma); !e.empty()) {
-    out.reason = e;
-    for (int i = 0; i < p.drones(); ++i)
-      if (!precise(p, sigma[i])) out.drones[i].resolved = false;
+  // Two connected drones in one place: the poses contradict themselves (a wrong match), so none
+  // but the reference is resolved.
+  std::vector<int> connected;
+  for (int i = 0; i < p.drones(); ++i)
+    if (ts.connected[i]) connected.push_back(i);
+  if (std::string e = overlap_problem(p, connected, yaw, ts.t); !e.empty()) {
+    problems.push_back(e + " (closer than min_separation " + std::to_string(p.min_separation) + " m)");
+    for (DronePose& d : out.drones) d.resolved = false;
+    out.drones[p.reference].resolved = true;
+  }
+  if (!problems.empty()) {
+    for (size_t i = 0; i < problems.size(); ++i) out.reason += (i ? "; " : "") + problems[i];
     return out;
   }
   out.status = EstimateStatus::certified;

@@ -109,6 +109,10 @@ struct Estimate {
   bool certified() const { return status == EstimateStatus::certified; }
 };
 
+// "" or what is wrong with the noise model (a term negative, not finite or above 1e6, floor and
+// odometry both below 1e-6 m, a zero gate), naming the field and the value.
+std::string check_noise(const NoiseModel& n);
+
 // Estimates the pose of every drone's odometry frame in the reference drone's frame.
 // Never throws on bad input: returns EstimateStatus::invalid_input with the reason.
 Estimate estimate_poses(const Rounds& rounds, const EstimateOptions& options = {});
