@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -27,6 +28,9 @@ namespace fact {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Largest |entry| and |no_match_cost|: sums and differences of potentials and slacks stay finite
+// (entries of ±1e308 overflowed the slacks to +inf and the search wrote outside its arrays).
+constexpr double kLargestCost = 1e100;
 
 // Per-thread working arrays, reused between calls so that a solve does not allocate once the
 // sizes have been seen. Rows are 1-based (1..rows); columns are 1-based (1..cols) with column 0 a
@@ -58,20 +62,22 @@ struct Scratch {
 std::string entry_text(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "+inf" : "-inf";
-  return std::to_string(value);
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
 }
 
 void validate(const Eigen::MatrixXd& cost, double no_match_cost) {
-  if (!std::isfinite(no_match_cost))
+  if (!(std::abs(no_match_cost) <= kLargestCost))
     throw std::invalid_argument("solve_assignment: no_match_cost = " + entry_text(no_match_cost) +
-                                " must be finite");
+                                " must be finite, at most 1e100 in magnitude");
   for (Eigen::Index c = 0; c < cost.cols(); ++c)
     for (Eigen::Index r = 0; r < cost.rows(); ++r) {
       const double x = cost(r, c);
-      if (std::isnan(x) || x == -kInf)
+      if (x != kInf && !(std::abs(x) <= kLargestCost))
         throw std::invalid_argument("solve_assignment: cost(row " + std::to_string(r) + ", col " +
                                     std::to_string(c) + ") = " + entry_text(x) +
-                                    "; entries must be finite or +inf");
+                                    "; entries must be +inf or finite, at most 1e100 in magnitude");
     }
 }
 

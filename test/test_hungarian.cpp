@@ -274,4 +274,20 @@ TEST(Hungarian, RejectsNonFiniteNoMatchCost) {
   }
 }
 
+// Entries and no_match_cost beyond ±1e100 are refused, naming them: at ±1e308 the slacks
+// overflowed to +inf and the search wrote outside its arrays (heap corruption, 3 × 1 of −1e308).
+TEST(Hungarian, RejectsHugeEntriesAndNoMatchCost) {
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(3, 1, -1e308);
+  std::string message = assignment_error(cost, 1e308);
+  EXPECT_NE(message.find("no_match_cost"), std::string::npos) << message;
+  message = assignment_error(cost, 1.0);
+  EXPECT_NE(message.find("row 0"), std::string::npos) << message;
+  EXPECT_NE(message.find("1e+308"), std::string::npos) << message;
+  // At the limit the answer is still right: the cheapest row takes the column.
+  cost << 1e100, -1e100, 0;
+  const fact::Assignment a = fact::solve_assignment(cost, 1e100);
+  EXPECT_EQ(a.col_to_row[0], 1);
+  EXPECT_EQ(a.cost, 1e100 + -1e100 + 1e100);
+}
+
 }  // namespace
