@@ -237,7 +237,10 @@ TEST(SolverAppCli, HelpExitsZeroAndListsTheFlags) {
 TEST_F(SolverApp, BadFlagsExitTwoNamingTheFlag) {
   const std::vector<std::vector<std::string>> solver_cases = {
       {"--mode", "bogus"}, {"--drone-id", "-1"}, {"--status-period", "0"}, {"--noise-floor", "nan"},
-      {"--max-complete-rounds", "0"}, {"--no-such-flag", "1"}, {"--reference", "-2"}};
+      {"--max-complete-rounds", "0"}, {"--no-such-flag", "1"}, {"--reference", "-2"},
+      // a gate whose square overflows (the solver used to abort on the first rounds); a heartbeat
+      // period whose µs overflow (it became 1 µs: a flood)
+      {"--gate", "1e300"}, {"--status-period", "1e13"}};
   int i = 0;
   for (const auto& args : solver_cases) {
     std::vector<std::string> words = {FACT_SOLVER_BINARY, "--lcm-url", kUrl};
@@ -361,6 +364,48 @@ TEST_F(SolverApp, EstimatesAgainWheneverARoundCompletes) {
   const auto capped = l.results("FACT_RESULT_K2");
   ASSERT_EQ(capped.size(), 2u) << k2.err();
   EXPECT_EQ(encode(capped[1]), encode(results[1]));
+  EXPECT_EQ(s.stop(), 0) << s.err();
+}
+
+// A drone joining at the same round count is new data: fact-gossip republishes when the set of
+// drones changes, and the solver estimates it (it used to count it as stale and keep the old
+// result until another round completed). The old set again is new once more; a repeat is stale.
+TEST_F(SolverApp, ANewSetOfDronesAtTheSameRoundCountIsEstimated) {
+  Listener l;
+  ASSERT_TRUE(l.good());
+  l.listen("FACT_RESULT_2");
+  l.listen("FACT_STATUS");
+  Process& s = start_solver(2);
+  await_ready(l, 2);
+  fact::SimOptions o;
+  o.drones = 4;
+  o.rounds = 3;
+  o.noise = fact::NoiseKind::depth;
+  o.seed = 8;
+  const fact::Rounds four = fact::generate_scenario(o).rounds;
+  const fact::Rounds& five = scenario_rounds();
+  ASSERT_NE(four.drones, five.drones);
+  const char* channel = "FACT_SWARM_ROUNDS_2";
+  const auto send = [&](const fact::Rounds& r, int64_t utime, std::size_t results) {
+    const fact::swarm_rounds_t m = fact::app::rounds_to_message(r, 2, utime);
+    l.lcm().publish(channel, &m);
+    return l.until([&] { return l.raw("FACT_RESULT_2").size() >= results; });
+  };
+  ASSERT_TRUE(send(four, 1, 1)) << s.err();
+  ASSERT_TRUE(send(five, 2, 2)) << s.err();  // the same 3 rounds, one drone more
+  ASSERT_TRUE(send(four, 3, 3)) << s.err();
+  const fact::swarm_rounds_t repeat = fact::app::rounds_to_message(four, 2, 4);
+  l.lcm().publish(channel, &repeat);
+  ASSERT_TRUE(l.until([&] {
+    const auto st = l.statuses("fact-solver", 2);
+    return !st.empty() && counter(st.back(), "stale") == 1;
+  })) << s.err();
+  const auto results = l.results("FACT_RESULT_2");
+  ASSERT_EQ(results.size(), 3u);
+  expect_result_equals(results[0], fact::estimate_poses(four, {}), 2, 1);
+  expect_result_equals(results[1], fact::estimate_poses(five, {}), 2, 2);
+  expect_result_equals(results[2], fact::estimate_poses(four, {}), 2, 3);
+  EXPECT_EQ(counter(l.statuses("fact-solver", 2).back(), "invalid_input"), 0);
   EXPECT_EQ(s.stop(), 0) << s.err();
 }
 

@@ -18,7 +18,7 @@ void add_common_flags(CLI::App& cli, CommonFlags* f, DroneIdFlag drone_id) {
   cli.add_option("--status-channel", f->status_channel, "Status heartbeat channel (fact::app_status_t)")
       ->type_name("CHANNEL")
       ->capture_default_str();
-  cli.add_option("--status-period", f->status_period, "Seconds between status messages (> 0)")
+  cli.add_option("--status-period", f->status_period, "Seconds between status messages (0.001 … 3600)")
       ->type_name("S")
       ->capture_default_str();
   cli.add_flag("--sim-clock", f->sim_clock,
@@ -48,7 +48,8 @@ void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id) {
   if (f.drone_id < 0)
     throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id));
   if (f.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
-  check_positive("--status-period", f.status_period);
+  // 1 ms … 1 h: the period in µs neither rounds to 0 nor overflows (1e13 s gave a 1 µs period).
+  check_range("--status-period", f.status_period, 0.001, 3600, "s");
   if (f.sim_clock && f.clock_channel.empty()) throw FlagError("--clock-channel: expected a channel name, got \"\"");
 }
 

@@ -22,7 +22,7 @@ struct CommonFlags {
   int drone_id = -1;                          // this drone's id (>= 0); names per-drone channels
   std::string lcm_url;                        // "" = LCM's default ($LCM_DEFAULT_URL)
   std::string status_channel = "FACT_STATUS"; // fact::app_status_t heartbeat
-  double status_period = 1.0;                 // s between heartbeats (> 0)
+  double status_period = 1.0;                 // s between heartbeats (0.001 … 3600)
   bool sim_clock = false;                     // take time from the simulator's clock
   std::string clock_channel = "FACT_SIM_CLOCK";  // fact::sim_clock_t
 };

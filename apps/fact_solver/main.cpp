@@ -3,8 +3,9 @@
 // FACT_RESULT_<id>), through the same fact::estimate_poses as the offline fact-solve.
 //
 // It estimates whenever complete_rounds grows beyond the last estimate (up to --rounds, when
-// given); repeats and older messages are counted ("stale") and ignored. Messages that arrive while an estimate runs are coalesced: only the
-// newest usable one is estimated next.
+// given) or the set of drones changes (a drone joined or went silent); repeats and older messages
+// are counted ("stale") and ignored. Messages that arrive while an estimate runs are coalesced:
+// only the newest usable one is estimated next.
 //
 // Deterministic: the published message depends only on the input message and the flags. Its utime
 // is the input message's utime (not the clock) and solve_us is 0 unless --publish-solve-time, so
@@ -34,6 +35,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -68,8 +70,9 @@ void add_flags(CLI::App& app, Options& o) {
   fact::app::add_estimator_flags(app, o.estimator);
   app.footer(
       "Subscribes to the swarm's complete rounds (fact::swarm_rounds_t, from fact-gossip) and, each\n"
-      "time complete_rounds grows, publishes fact::swarm_result_t: the yaw (rad) and origin (m) of\n"
-      "every drone's odometry frame in the reference drone's frame, with the SDP certificate.\n"
+      "time complete_rounds grows or the set of drones changes, publishes fact::swarm_result_t:\n"
+      "the yaw (rad) and origin (m) of every drone's odometry frame in the reference drone's frame,\n"
+      "with the SDP certificate.\n"
       "The result's utime is the input message's utime and solve_us is 0 (unless\n"
       "--publish-solve-time), so the same data gives the same bytes on every drone and in replays.\n"
       "Noise model: sigma(d) = sqrt(floor^2 + (linear*d + quadratic*d^2)^2 + (bearing*d)^2).\n"
@@ -95,6 +98,7 @@ fact::EstimateOptions check(Options& o) {
 // The usable input waiting for the next estimate.
 struct Pending {
   int complete_rounds = 0;
+  std::vector<int> drone_ids;  // as in the message
   int64_t utime = 0;
   fact::Rounds rounds;
 };
@@ -129,9 +133,14 @@ class Solver {
              std::to_string(options_.max_complete_rounds) + "]");
       return;
     }
+    // New data: another set of drones (one joined or went silent, whatever the round count), or
+    // more usable rounds of the same set. Otherwise a repeat, an older message, or rounds beyond
+    // --rounds: nothing new.
     const int newest = pending_ ? pending_->complete_rounds : estimated_rounds_;
-    if (usable(msg.complete_rounds) <= usable(newest)) {
-      status_.count("stale");  // a repeat, an older message, or rounds beyond --rounds: nothing new
+    const std::vector<int>& newest_ids = pending_ ? pending_->drone_ids : estimated_ids_;
+    const std::vector<int> ids(msg.drone_ids.begin(), msg.drone_ids.end());
+    if (ids == newest_ids && usable(msg.complete_rounds) <= usable(newest)) {
+      status_.count("stale");
       return;
     }
     fact::Rounds rounds;
@@ -140,7 +149,7 @@ class Solver {
       reject("swarm_rounds on " + channel + ": " + error);
       return;
     }
-    pending_ = Pending{msg.complete_rounds, msg.utime, std::move(rounds)};
+    pending_ = Pending{msg.complete_rounds, ids, msg.utime, std::move(rounds)};
   }
 
   // Runs after every wait of the loop: takes every queued message, estimates the newest, publishes
@@ -151,7 +160,14 @@ class Solver {
     if (pending_) {
       Pending p = std::move(*pending_);
       pending_.reset();
-      estimate(p);
+      try {
+        estimate(p);
+      } catch (const std::exception& e) {  // estimate_poses does not throw on bad input: a bug, not fatal
+        status_.count("estimator_failed");
+        status_.note(std::string("estimator threw: ") + e.what());
+        log_.event("estimate of complete_rounds=" + std::to_string(p.complete_rounds) + " failed: estimator threw: " +
+                   e.what());
+      }
     }
     status_.tick(now);
   }
@@ -168,10 +184,10 @@ class Solver {
     return cap > 0 && complete_rounds > cap ? cap : complete_rounds;
   }
 
+  // Counted; logged the first 10 times, then every 100th (a flood of bad messages stays readable).
   void reject(const std::string& why) {
-    status_.count("invalid_input");
     status_.note(why);
-    log_.event("rejected: " + why);
+    fact::app::count_and_log(status_, log_, "invalid_input", "rejected: " + why);
   }
 
   void estimate(const Pending& p) {
@@ -181,6 +197,7 @@ class Solver {
     fact::swarm_result_t result = fact::app::result_to_message(e, options_.common.drone_id, p.utime);
     if (!options_.publish_solve_time) result.solve_us = 0;
     estimated_rounds_ = p.complete_rounds;
+    estimated_ids_ = p.drone_ids;
     status_.count("estimates");
     status_.count(e.status == fact::EstimateStatus::certified   ? "certified"
                   : e.status == fact::EstimateStatus::ambiguous ? "ambiguous"
@@ -212,6 +229,7 @@ class Solver {
   fact::app::Log log_;
   fact::app::Status status_;
   int estimated_rounds_ = 0;        // complete_rounds of the last estimate (0 = none yet)
+  std::vector<int> estimated_ids_;  // its drone_ids
   std::optional<Pending> pending_;  // the newest usable input not yet estimated
 };
 
