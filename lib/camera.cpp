@@ -15,10 +15,16 @@ std::string intrinsics_error(const CameraIntrinsics& k) {
   auto bad = [](const char* field, double v) { return std::string(field) + " = " + std::to_string(v); };
   if (k.width <= 0 || k.width > 8192) return bad("width", k.width) + " (must be 1 … 8192)";
   if (k.height <= 0 || k.height > 8192) return bad("height", k.height) + " (must be 1 … 8192)";
-  if (!std::isfinite(k.fx) || k.fx <= 0) return bad("fx", k.fx) + " (must be finite and > 0)";
-  if (!std::isfinite(k.fy) || k.fy <= 0) return bad("fy", k.fy) + " (must be finite and > 0)";
-  if (!std::isfinite(k.cx)) return bad("cx", k.cx) + " (must be finite)";
-  if (!std::isfinite(k.cy)) return bad("cy", k.cy) + " (must be finite)";
+  // Focal lengths 1 … 1e6 px; the principal point within one image size of the image (cx = 1e6
+  // put a 3 m drone 7.7 km away, 1e300 made the ray NaN).
+  if (!(k.fx >= 1 && k.fx <= 1e6)) return bad("fx", k.fx) + " (must be 1 … 1e6 px)";
+  if (!(k.fy >= 1 && k.fy <= 1e6)) return bad("fy", k.fy) + " (must be 1 … 1e6 px)";
+  if (!(k.cx >= -k.width && k.cx <= 2.0 * k.width))
+    return bad("cx", k.cx) + " (must be within -width … 2·width = " + std::to_string(-k.width) + " … " +
+           std::to_string(2 * k.width) + " px)";
+  if (!(k.cy >= -k.height && k.cy <= 2.0 * k.height))
+    return bad("cy", k.cy) + " (must be within -height … 2·height = " + std::to_string(-k.height) + " … " +
+           std::to_string(2 * k.height) + " px)";
   return "";
 }
 

@@ -10,6 +10,7 @@
 #include "fact/camera.h"
 #include "fact/detections_t.hpp"
 #include "fact/frame_t.hpp"
+#include "fact/odometry_t.hpp"
 #include "private_netns.h"
 #include "temp_dir.h"
 #include "test_time.h"
@@ -267,6 +268,20 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
   m.drone_id = 3;  // another drone's frame
   lcm.publish("FACT_FRAMES_2", &m);
   good();
+  m = frame(seq++);
+  m.cx = 1e6;  // principal point far outside the image (ranges of kilometres, or NaN at 1e300)
+  lcm.publish("FACT_FRAMES_2", &m);
+  good();
+  m = frame(seq++);  // 481 × 1: valid, but decimated to 0 rows it aborted the app in OpenCV
+  m.width = 481;
+  m.height = 1;
+  m.cx = 240;
+  m.cy = 0;
+  m.gray_size = m.depth_size = 481;
+  m.gray.assign(481, 100);
+  m.depth_mm.assign(481, 3000);
+  lcm.publish("FACT_FRAMES_2", &m);
+  pump(100);
   {
     m = frame(seq++);
     std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
@@ -274,7 +289,7 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
     lcm.publish("FACT_FRAMES_2", bytes.data(), static_cast<unsigned>(bytes.size() / 2));  // truncated
   }
   good();
-  pump_until([&] { return got.size() >= 7; }, 1200);
+  pump_until([&] { return got.size() >= 9; }, 1200);
   kill(pid, SIGTERM);
   const int code = exit_code(pid);
   pump(300);
@@ -283,17 +298,111 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
   ASSERT_FALSE(status.empty()) << err;
   const fact::app_status_t& last = status.back();
   auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
-  EXPECT_EQ(counter("published"), 7) << err;  // every good frame, also the ones after bad ones
+  EXPECT_EQ(counter("published"), 9) << err;  // every good frame (the 481 × 1 one too), also after bad ones
   EXPECT_EQ(counter("bad_frame"), 1) << err;
-  EXPECT_EQ(counter("bad_intrinsics"), 1) << err;
+  EXPECT_EQ(counter("bad_intrinsics"), 2) << err;
   EXPECT_EQ(counter("no_depth"), 1) << err;
   EXPECT_EQ(counter("size_mismatch"), 1) << err;
   EXPECT_EQ(counter("wrong_drone_id"), 1) << err;
   EXPECT_EQ(counter("undecodable"), 1) << err;
-  EXPECT_EQ(got.size(), 7u) << err;
+  EXPECT_EQ(got.size(), 9u) << err;
   for (const auto& d : got) EXPECT_EQ(d.count, 0);  // a bare wall holds no drone
   EXPECT_NE(err.find("fx"), std::string::npos) << err;
+  EXPECT_NE(err.find("cx = 1000000"), std::string::npos) << err;
   EXPECT_NE(err.find("drone_id = 3"), std::string::npos) << err;
+}
+
+// Odometry over LCM with a drone in view: one sample 10⁶ s in the future is refused (it used to
+// be kept, every later sample refused as older, and the attitude frozen at the old pitch); the
+// pitch that follows reaches the detections' vectors. A seq going back (fact-vio-relay's restart
+// after a VIO clock reset) restarts the buffer instead of losing every later sample.
+TEST_F(DetectorApp, OdometryGlitchAndRestartDoNotFreezeTheAttitude) {
+  const std::string url = kUrl + "&recv_buf_size=4194304";
+  lcm::LCM lcm(url);
+  ASSERT_TRUE(lcm.good());
+  std::vector<fact::detections_t> got;
+  std::vector<fact::app_status_t> status;
+  struct Sink {
+    std::vector<fact::detections_t>* got;
+    std::vector<fact::app_status_t>* status;
+    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
+    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
+  } sink{&got, &status};
+  lcm.subscribe("FACT_DETECTIONS_2", &Sink::det, &sink)->setQueueCapacity(100);
+  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
+  const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", url, "--status-period", "0.2"}, dir_ / "err");
+  ASSERT_GT(pid, 0);
+  auto pump_until = [&](const std::function<bool()>& done, int ms) {
+    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::milliseconds(ms));
+    while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
+  };
+  pump_until([&] { return !status.empty(); }, 5000);
+  ASSERT_FALSE(status.empty()) << read_text(dir_ / "err");
+
+  const fact::CameraIntrinsics k = fact::d430_424x240();
+  int64_t odometry_seq = 0;
+  auto odometry = [&](int64_t utime, double pitch, int64_t seq) {
+    fact::odometry_t o{};
+    o.utime = utime;
+    o.drone_id = 2;
+    o.seq = seq;
+    o.pitch = pitch;
+    lcm.publish("FACT_ODOMETRY_2", &o);
+  };
+  // Frame f at 2000 s + f·66.7 ms: a drone-sized blob 3 m ahead in front of a wall at 6 m, after
+  // the odometry up to its time (10 ms apart) at `pitch`.
+  auto frame = [&](int64_t f, double pitch) {
+    const int64_t t = 2000000000 + f * 66666;
+    for (int64_t u = t - 66666 + 10000; u <= t; u += 10000) odometry(u, pitch, odometry_seq++);
+    fact::frame_t m;
+    m.utime = t;
+    m.drone_id = 2;
+    m.seq = f;
+    m.width = k.width;
+    m.height = k.height;
+    m.fx = k.fx, m.fy = k.fy, m.cx = k.cx, m.cy = k.cy;
+    m.gray_size = m.depth_size = k.width * k.height;
+    m.gray.assign(static_cast<size_t>(m.gray_size), 100);
+    m.depth_mm.assign(static_cast<size_t>(m.depth_size), 6000);
+    const int hw = static_cast<int>(0.20 * k.fx / 3.0), hh = static_cast<int>(0.04 * k.fy / 3.0);
+    for (int v = 120 - hh; v <= 120 + hh; ++v)
+      for (int u = 212 - hw; u <= 212 + hw; ++u) m.depth_mm[static_cast<size_t>(v * k.width + u)] = 3000;
+    lcm.publish("FACT_FRAMES_2", &m);
+    const size_t before = got.size();
+    pump_until([&] { return got.size() > before; }, 2000);
+  };
+  for (int f = 0; f < 4; ++f) frame(f, 0.0);
+  odometry(2000000000 + 4 * 66666 + 1000000000000, 0.0, odometry_seq++);  // 10⁶ s ahead
+  for (int f = 4; f < 10; ++f) frame(f, 0.3);
+  // The relay restarts after a VIO clock reset: seq 0 and earlier times, then frames at those times.
+  odometry_seq = 0;
+  for (int f = 10; f < 14; ++f) frame(f - 3000, 0.0);
+  pump_until([&] { return false; }, 500);
+  kill(pid, SIGTERM);
+  const int code = exit_code(pid);
+  const std::string err = read_text(dir_ / "err");
+  EXPECT_EQ(code, 0) << err;
+  ASSERT_EQ(got.size(), 14u) << err;
+  // The vector's z (gravity-aligned, m) follows the pitch: about 0 level, about ±0.9 at 0.3 rad.
+  for (size_t i = 0; i < got.size(); ++i) {
+    if (got[i].count != 1) continue;  // the tracker confirms a drone on its second frame
+    const double z = got[i].detections[0].vector[2];
+    if (i >= 5 && i < 10) {
+      EXPECT_GT(std::abs(z), 0.5) << "frame " << i << ": the attitude froze\n" << err;
+    } else if (i < 4 || i >= 11) {
+      EXPECT_LT(std::abs(z), 0.2) << "frame " << i << "\n" << err;
+    }
+  }
+  int confirmed = 0;
+  for (size_t i = 5; i < 10; ++i) confirmed += got[i].count;
+  EXPECT_GE(confirmed, 4) << err;
+  ASSERT_FALSE(status.empty());
+  const fact::app_status_t& last = status.back();
+  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
+  EXPECT_EQ(counter("odometry_out_of_order"), 1) << err;
+  EXPECT_EQ(counter("odometry_restarts"), 1) << err;
+  EXPECT_NE(err.find("is more than 10 s after the newest sample"), std::string::npos) << err;
+  EXPECT_NE(err.find("the odometry restarted"), std::string::npos) << err;
 }
 
 }  // namespace

@@ -61,9 +61,33 @@ TEST(DetectorFrame, ErrorsNameTheField) {
   f = p.view();
   f.depth_mm = nullptr;
   EXPECT_EQ(fact::frame_error(f), "depth_mm: null buffer");
+  // The principal point within one image size of the image; focal lengths 1 … 1e6 px.
+  f = p.view();
+  f.intrinsics.cx = 1e6;
+  EXPECT_NE(fact::frame_error(f).find("cx = 1000000"), std::string::npos) << fact::frame_error(f);
+  f = p.view();
+  f.intrinsics.cy = -481;
+  EXPECT_NE(fact::frame_error(f).find("cy = -481"), std::string::npos) << fact::frame_error(f);
+  f = p.view();
+  f.intrinsics.fy = 0.5;
+  EXPECT_NE(fact::frame_error(f).find("fy = 0.5"), std::string::npos) << fact::frame_error(f);
   std::fill(p.depth.begin(), p.depth.end(), 0);
   EXPECT_EQ(fact::frame_error(p.view()), "depth_mm: all 307200 pixels are 0 (no valid depth)");
   EXPECT_TRUE(fact::detect_depth(p.view(), {}).empty());
+}
+
+// One-row and one-column frames too narrow to decimate are segmented at full resolution (481 × 1
+// decimated to 0 rows threw inside OpenCV and aborted fact-detector).
+TEST(DetectorSegmentation, ThinFramesAreSegmentedWithoutDecimation) {
+  for (const auto& [w, h] : {std::pair{481, 1}, std::pair{640, 1}, std::pair{1, 481}, std::pair{481, 2}}) {
+    std::vector<uint8_t> gray(static_cast<size_t>(w * h), 100);
+    std::vector<uint16_t> depth(static_cast<size_t>(w * h), 3000);
+    fact::FrameView f;
+    f.intrinsics = fact::CameraIntrinsics{w, h, 387, 387, w / 2.0, h / 2.0};
+    f.gray = gray.data();
+    f.depth_mm = depth.data();
+    EXPECT_NO_THROW(fact::detect_depth(f, {})) << w << " x " << h;
+  }
 }
 
 TEST(DetectorSegmentation, FindsDroneSizedNearBlobsOnly) {

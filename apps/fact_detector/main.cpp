@@ -25,6 +25,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -36,6 +37,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -122,7 +125,10 @@ void add_flags(CLI::App& app, Options& o) {
       "(t tx ty tz qx qy qz qw, t in s, Hamilton world-from-body quaternion).\n"
       "Rejected, counted and logged, the app keeps running: wrong sizes (bad_frame), bad intrinsics\n"
       "(bad_intrinsics), all-invalid depth (no_depth), depth and gray of different sizes (size_mismatch),\n"
-      "another drone's frame (wrong_drone_id), undecodable messages (undecodable).\n"
+      "another drone's frame (wrong_drone_id), undecodable messages (undecodable), non-finite attitude\n"
+      "(bad_odometry), odometry not later than the newest sample or more than 10 s after it\n"
+      "(odometry_out_of_order; 20 such in a consistent run, or a seq going back, restart the attitude\n"
+      "buffer: odometry_restarts).\n"
       "Exit codes: 0 end of --png-dir or SIGINT/SIGTERM; 1 LCM failure; 2 bad flags, unreadable --png-dir,\n"
       "or a --model that fails to load.");
 }
@@ -153,6 +159,13 @@ void check(Options& o) {
   fact::app::check_positive("--max-depth", o.segmentation.max_depth);
   fact::app::check_positive("--min-size", o.segmentation.min_size);
   fact::app::check_positive("--max-size", o.segmentation.max_size);
+  // Each alone is fine; together they must leave something to find (9 … 8 m found nothing, silently).
+  if (!(o.segmentation.min_depth < o.segmentation.max_depth))
+    throw fact::app::FlagError("--min-depth " + std::to_string(o.segmentation.min_depth) + " must be below --max-depth " +
+                               std::to_string(o.segmentation.max_depth));
+  if (!(o.segmentation.min_size <= o.segmentation.max_size))
+    throw fact::app::FlagError("--min-size " + std::to_string(o.segmentation.min_size) +
+                               " must be at most --max-size " + std::to_string(o.segmentation.max_size));
   if (!(o.segmentation.background_gap >= 0))
     throw fact::app::FlagError("--background-gap: expected a number >= 0, got " +
                                std::to_string(o.segmentation.background_gap));
@@ -174,10 +187,34 @@ struct Attitude {
 };
 class AttitudeBuffer {
  public:
-  void push(const Attitude& a) {
-    if (!samples_.empty() && a.utime <= samples_.back().utime) return;
-    samples_.push_back(a);
-    while (samples_.size() > 2000) samples_.pop_front();
+  static constexpr int64_t kMaxGapUs = 10000000;  // a sample more than 10 s after the newest is refused
+  static constexpr std::size_t kRestartRun = 20;  // refused samples in a consistent run that restart it
+  static constexpr std::size_t kCapacity = 2000;
+
+  enum class Push { accepted, restarted, not_later, too_far_ahead };
+
+  // A sample with its odometry seq. A seq going back is the relay's restart (its clock was reset):
+  // the buffer starts again. A sample not later than the newest, or more than kMaxGapUs after it,
+  // is refused; kRestartRun refused samples in a row, each later than the one before and within
+  // kMaxGapUs of it, are a new clock too and start the buffer again (one glitched sample far
+  // ahead used to freeze the attitude for good, and a VIO clock reset lost every later sample).
+  Push push(const Attitude& a, int64_t seq) {
+    const bool seq_back = have_seq_ && seq < last_seq_;
+    have_seq_ = true;
+    last_seq_ = seq;
+    if (seq_back) return restart({a});
+    if (samples_.empty() || (a.utime > samples_.back().utime && a.utime - samples_.back().utime <= kMaxGapUs)) {
+      run_.clear();
+      samples_.push_back(a);
+      while (samples_.size() > kCapacity) samples_.pop_front();
+      return Push::accepted;
+    }
+    const bool consistent =
+        !run_.empty() && a.utime > run_.back().utime && a.utime - run_.back().utime <= kMaxGapUs;
+    if (!consistent) run_.clear();
+    run_.push_back(a);
+    if (run_.size() >= kRestartRun) return restart(std::deque<Attitude>(run_.begin(), run_.end()));
+    return a.utime <= samples_.back().utime ? Push::not_later : Push::too_far_ahead;
   }
   bool empty() const { return samples_.empty(); }
   int64_t newest() const { return samples_.empty() ? INT64_MIN : samples_.back().utime; }
@@ -194,7 +231,16 @@ class AttitudeBuffer {
   }
 
  private:
+  Push restart(std::deque<Attitude> samples) {
+    samples_ = std::move(samples);
+    run_.clear();
+    return Push::restarted;
+  }
+
   std::deque<Attitude> samples_;
+  std::deque<Attitude> run_;  // refused samples since the last accepted one, while consistent
+  bool have_seq_ = false;
+  int64_t last_seq_ = 0;
 };
 
 // Backend + tracker + range: a frame with its attitude → detections_t.
@@ -212,7 +258,11 @@ class Pipeline {
       boxes = yolo_->detect(frame, &error);
       if (!error.empty()) return "yolo: " + error;
     } else {
-      boxes = fact::detect_depth(frame, o_.segmentation);
+      try {  // OpenCV asserts by throwing: a frame it cannot handle is that frame's failure, not the app's
+        boxes = fact::detect_depth(frame, o_.segmentation);
+      } catch (const cv::Exception& e) {
+        return std::string("depth segmentation: ") + e.what();
+      }
     }
     Eigen::Matrix3d H = Eigen::Matrix3d::Identity();  // previous frame's pixels → this frame's
     if (att && previous_) {
@@ -284,7 +334,8 @@ class App {
     status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
     for (const char* c : {"frames", "published", "detections", "bad_frame", "size_mismatch", "bad_intrinsics",
                           "no_depth", "wrong_drone_id", "undecodable", "stale_odometry", "no_odometry",
-                          "backend_failed", "publish_failed"})
+                          "bad_odometry", "odometry_out_of_order", "odometry_restarts", "backend_failed",
+                          "publish_failed"})
       status_.count(c, 0);
   }
   const fact::app::Log& log() const { return log_; }
@@ -299,7 +350,7 @@ class App {
       reject(counter, e);
       return;
     }
-    pending_.push_back(Pending{m, fact::app::now_us()});
+    pending_.push_back(Pending{m, fact::app::monotonic_us()});
     while (pending_.size() > 4) {  // never fall behind: the oldest goes with what we have
       run(pending_.front());
       pending_.pop_front();
@@ -314,17 +365,34 @@ class App {
       reject("wrong_drone_id", "odometry from drone " + std::to_string(m.drone_id) + " on " + channel);
       return;
     }
-    if (!std::isfinite(m.yaw) || !std::isfinite(m.pitch) || !std::isfinite(m.roll)) {
-      reject("bad_odometry", "odometry seq " + std::to_string(m.seq) + ": non-finite attitude");
-      return;
+    for (const auto& [field, v] : {std::pair<const char*, double>{"yaw", m.yaw}, {"pitch", m.pitch}, {"roll", m.roll}})
+      if (!std::isfinite(v)) {
+        reject("bad_odometry", "odometry seq " + std::to_string(m.seq) + ": " + field + " = " + std::to_string(v) +
+                                   " (must be finite)");
+        return;
+      }
+    const int64_t newest = attitudes_.newest();
+    const std::string at = "odometry seq " + std::to_string(m.seq) + " utime " + std::to_string(m.utime);
+    switch (attitudes_.push(Attitude{m.utime, m.yaw, m.pitch, m.roll}, m.seq)) {
+      case AttitudeBuffer::Push::accepted: break;
+      case AttitudeBuffer::Push::restarted:
+        status_.count("odometry_restarts");
+        log_.event(at + ": the odometry restarted (seq or clock went back, or a new clock): attitude buffer reset");
+        break;
+      case AttitudeBuffer::Push::not_later:
+        reject("odometry_out_of_order", at + " is not later than the newest sample " + std::to_string(newest));
+        return;
+      case AttitudeBuffer::Push::too_far_ahead:
+        reject("odometry_out_of_order", at + " is more than 10 s after the newest sample " + std::to_string(newest));
+        return;
     }
-    attitudes_.push(Attitude{m.utime, m.yaw, m.pitch, m.roll});
     flush(false);
   }
 
   // Runs the pending frames whose odometry is there, or whose wait is over (all with force).
+  // The wait runs on the monotonic clock (a wall-clock step back held every frame behind it).
   void flush(bool force) {
-    const int64_t now = fact::app::now_us();
+    const int64_t now = fact::app::monotonic_us();
     while (!pending_.empty()) {
       const Pending& p = pending_.front();
       const bool ready = attitudes_.newest() >= p.frame->utime;
@@ -333,7 +401,7 @@ class App {
       run(p);
       pending_.pop_front();
     }
-    status_.tick(now);
+    status_.tick(fact::app::now_us());
   }
 
   // One frame from any source, with its attitude (or none).
@@ -379,7 +447,8 @@ class App {
     s << "frames " << status_.value("frames") << ", published " << status_.value("published") << ", detections "
       << status_.value("detections");
     for (const char* c : {"bad_frame", "size_mismatch", "bad_intrinsics", "no_depth", "wrong_drone_id", "undecodable",
-                          "stale_odometry", "no_odometry", "bad_odometry", "backend_failed", "publish_failed"})
+                          "stale_odometry", "no_odometry", "bad_odometry", "odometry_out_of_order",
+                          "odometry_restarts", "backend_failed", "publish_failed"})
       if (status_.value(c) > 0) s << ", " << c << " " << status_.value(c);
     return s.str();
   }
@@ -387,7 +456,7 @@ class App {
  private:
   struct Pending {
     std::shared_ptr<fact::frame_t> frame;
-    int64_t arrival;  // µs (app clock)
+    int64_t arrival;  // µs (monotonic_us: the odometry wait survives wall-clock steps)
   };
 
   void run(const Pending& p) {
@@ -437,8 +506,15 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
     nlohmann::json j = nlohmann::json::parse(in);
     for (const char* key : {"width", "height", "fx", "fy", "cx", "cy"})
       if (!j.contains(key) || !j[key].is_number()) return ipath.string() + ": \"" + key + "\" missing or not a number";
-    *k = fact::CameraIntrinsics{j["width"].get<int>(), j["height"].get<int>(), j["fx"].get<double>(),
-                                j["fy"].get<double>(), j["cx"].get<double>(), j["cy"].get<double>()};
+    int size[2] = {0, 0};  // width, height: whole numbers 1 … 8192, checked before narrowing
+    for (int i = 0; i < 2; ++i) {
+      const char* key = i == 0 ? "width" : "height";
+      const bool whole = j[key].is_number_integer() && j[key].get<int64_t>() >= 1 && j[key].get<int64_t>() <= 8192;
+      if (!whole) return ipath.string() + ": \"" + key + "\" = " + j[key].dump() + " (must be a whole number 1 … 8192)";
+      size[i] = static_cast<int>(j[key].get<int64_t>());
+    }
+    *k = fact::CameraIntrinsics{size[0], size[1], j["fx"].get<double>(), j["fy"].get<double>(), j["cx"].get<double>(),
+                                j["cy"].get<double>()};
   } catch (const std::exception& e) {
     return ipath.string() + ": " + e.what();
   }
@@ -450,7 +526,10 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
     if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
     const std::string stem = name.substr(0, name.size() - suffix.size());
     if (stem.empty() || stem.find_first_not_of("0123456789") != std::string::npos) continue;
-    const int64_t t = std::stoll(stem);
+    int64_t t = 0;
+    const auto [end, err] = std::from_chars(stem.data(), stem.data() + stem.size(), t);
+    if (err != std::errc() || end != stem.data() + stem.size())
+      return (fs::path(dir) / name).string() + ": the time " + stem + " µs does not fit in 64 bits";
     found[t] = PngPair{t, entry.path(), fs::path(dir) / (stem + "_depth.png")};
   }
   for (auto& [t, p] : found) pairs->push_back(p);
@@ -458,14 +537,22 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
   std::ifstream odo(tum);
   std::string line;
   *odometry_lines = 0;
+  int64_t line_number = 0;
+  std::optional<double> previous_yaw;
   while (odo && std::getline(odo, line)) {
+    ++line_number;
     fact::PoseLine pl;
     std::string error;
     if (fact::parse_pose_line(line, &pl, &error) != fact::PoseLineKind::sample) continue;
     fact::Attitude a;
     if (!fact::attitude_from_quaternion(pl.qx, pl.qy, pl.qz, pl.qw, &a).empty()) continue;
-    attitudes->push(Attitude{static_cast<int64_t>(std::llround(pl.time * 1e6)), a.yaw, a.pitch, a.roll});
-    ++*odometry_lines;
+    // Unwrapped, as the buffer interpolates linearly (a frame between samples at +3.1 and −3.1 rad
+    // got a yaw near 0, and its rotation homography lost the track).
+    if (previous_yaw) a.yaw = *previous_yaw + std::remainder(a.yaw - *previous_yaw, 2 * M_PI);
+    previous_yaw = a.yaw;
+    if (attitudes->push(Attitude{static_cast<int64_t>(std::llround(pl.time * 1e6)), a.yaw, a.pitch, a.roll},
+                        line_number) == AttitudeBuffer::Push::accepted)
+      ++*odometry_lines;
   }
   return "";
 }

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -82,10 +83,22 @@ std::vector<Blob> merge_parts(const std::vector<Blob>& parts, const Segmentation
   const int n = static_cast<int>(parts.size());
   std::vector<int> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
-  for (int i = 0; i < n; ++i)
-    for (int j = i + 1; j < n; ++j) {
+  // Pairs are swept in order of u0, and a's sweep stops at the first part that starts more than
+  // the largest possible gap (at the nearest part's depth) right of a's box: every pair that can
+  // merge is still tested, but a speckled frame's thousands of parts no longer cost n² tests
+  // (1.1 s a frame at 1280 × 720). The groups do not depend on the order of the unions.
+  double z_min = std::numeric_limits<double>::infinity();
+  for (const Blob& b : parts) z_min = std::min(z_min, b.z());
+  const double max_gap_px = o.merge_gap * fx / z_min;
+  std::vector<int> by_u0(n);
+  std::iota(by_u0.begin(), by_u0.end(), 0);
+  std::sort(by_u0.begin(), by_u0.end(), [&](int x, int y) { return parts[x].u0 < parts[y].u0; });
+  for (int x = 0; x < n; ++x)
+    for (int y = x + 1; y < n; ++y) {
+      const int i = by_u0[x], j = by_u0[y];
       const Blob& a = parts[i];
       const Blob& b = parts[j];
+      if (b.u0 - a.u1 - 1 > max_gap_px) break;  // so are all later parts (their u0 is larger)
       const double za = a.z(), zb = b.z(), zn = std::min(za, zb);
       const double edge_mm = edge[static_cast<size_t>(std::min<double>(zn * 1000.0, edge.size() - 1))];
       if (std::abs(za - zb) * 1000.0 > std::max(o.merge_depth * 1000.0, edge_mm)) continue;
@@ -198,7 +211,8 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
   std::vector<BoxDetection> out;
   const CameraIntrinsics& full = frame.intrinsics;
   if (!frame_error(frame).empty()) return out;
-  const int f = o.decimation > 0 ? o.decimation : (full.width > 480 ? 2 : 1);
+  int f = o.decimation > 0 ? o.decimation : (full.width > 480 ? 2 : 1);
+  if (full.width / f < 1 || full.height / f < 1) f = 1;  // a 481 × 1 frame decimated to 0 rows aborted OpenCV
   const cv::Mat raw(full.height, full.width, CV_16U, const_cast<uint16_t*>(frame.depth_mm));
   // Buffers reused across calls (never aliasing the caller's pixels); reduced and work are views.
   thread_local cv::Mat reduced_buffer, median_buffer, mask, labels;
@@ -240,6 +254,18 @@ std::vector<BoxDetection> detect_depth(const FrameView& frame, const Segmentatio
     if (z * 1000.0 > hi_mm) continue;
     if ((b.u1 - b.u0 + 1) * z / k.fx > o.max_size || (b.v1 - b.v0 + 1) * z / k.fy > o.max_size) continue;
     parts.push_back(b);
+  }
+  if (o.max_parts >= 0 && parts.size() > static_cast<size_t>(o.max_parts)) {
+    // The largest by area (ties: the first found), kept in the order found.
+    std::vector<size_t> order(parts.size());
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) { return parts[x].area > parts[y].area; });
+    order.resize(static_cast<size_t>(o.max_parts));
+    std::sort(order.begin(), order.end());
+    std::vector<Blob> kept;
+    kept.reserve(order.size());
+    for (size_t i : order) kept.push_back(parts[i]);
+    parts.swap(kept);
   }
   for (const Blob& g : merge_parts(parts, o, edge, k.fx)) {
     const double z = g.z();

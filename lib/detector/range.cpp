@@ -55,7 +55,7 @@ TargetVector target_vector(const FrameView& frame, const BoxDetection& box, cons
   t.vector_b = extrinsics.R_body_cam * t.point_c + extrinsics.t_body_cam;
   t.vector_g = gravity_from_body(roll, pitch) * t.vector_b;
   t.range = t.vector_g.norm();
-  t.valid = true;
+  t.valid = std::isfinite(t.range);  // never a NaN or infinite vector, whatever the box
   return t;
 }
 

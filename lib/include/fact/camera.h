@@ -41,8 +41,8 @@ struct DepthNoise {
 };
 double depth_sigma(const DepthNoise& n, double fx, double z);  // m
 
-// "" when usable, else what is wrong with which field and value (sizes > 0, finite focal
-// lengths > 0, finite principal point).
+// "" when usable, else what is wrong with which field and value (sizes 1 … 8192, focal lengths
+// 1 … 1e6 px, principal point within one image size of the image: -width … 2·width).
 std::string intrinsics_error(const CameraIntrinsics& k);
 
 // Where the camera sits on the body: p_b = R_body_cam · p_c + t_body_cam.

@@ -52,6 +52,8 @@ struct SegmentationOptions {
   double tilt_slack = 0.35;    // rad: the target's and the observer's tilt, together
   int min_pixels = 4;          // full-resolution pixels in a blob (after merging its parts)
   int min_part_pixels = 2;     // working pixels; smaller components are noise, never a drone's part
+  int max_parts = 2000;        // parts kept for merging, the largest by area (speckled depth made
+                               // tens of thousands, and merging them took seconds a frame)
   // Parts of one drone (rotors, body) that the segmentation splits are merged when their mean
   // depths differ by less than merge_depth (or the edge threshold, if larger) and their boxes are
   // closer than merge_gap. A drone's rotor centres are 0.28 m apart, so seen from any side its
