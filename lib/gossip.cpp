@@ -764,6 +764,8 @@ std::vector<std::pair<std::string, int64_t>> BuilderCounters::list() const {
           {"moves", moves},
           {"dropped_history", dropped_history},
           {"dropped_tracks", dropped_tracks},
+          {"odometry_gaps", odometry_gaps},
+          {"odometry_restarts", restarts},
           {"rounds_built", rounds}};
 }
 
@@ -834,6 +836,14 @@ bool RoundBuilder::moving() const {
 void RoundBuilder::close_if_spun() {
   const Odo& last = odo_.back();
   if (opt_.round_period_us > 0) {
+    // A gap in the odometry: the period it interrupted has no odometry to close on, and closing
+    // one empty round per period inside it made millions (a boot clock becoming Unix time ran out
+    // of memory); the next period starts at this sample.
+    if (odo_.size() >= 2 && last.t - odo_[odo_.size() - 2].t > opt_.max_odometry_gap_us) {
+      ++counters_.odometry_gaps;
+      open_start_ = last.t;
+      return;
+    }
     while (last.t >= open_start_ + opt_.round_period_us) {
       closing_.push_back({open_start_, open_start_ + opt_.round_period_us});
       open_start_ += opt_.round_period_us;
@@ -979,6 +989,18 @@ std::string RoundBuilder::add_detection(int64_t utime, int track_id, const Eigen
     ++counters_.dropped_history;
   }
   return "";
+}
+
+void RoundBuilder::restart() {
+  for (const Closed& c : closing_) finalize(c);  // closed on the old clock: complete as they are
+  closing_.clear();
+  odo_.clear();
+  det_.clear();
+  started_ = false;
+  moving_ = false;
+  open_start_ = 0;
+  min_yaw_ = max_yaw_ = 0;
+  ++counters_.restarts;
 }
 
 std::vector<BuiltRound> RoundBuilder::take_rounds() {

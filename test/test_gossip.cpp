@@ -768,6 +768,52 @@ TEST(RoundBuilder, PeriodModeAndBadSamples) {
   EXPECT_EQ(b.counters().late_detections, 1);
 }
 
+// Period mode across a gap in the odometry: the periods inside the gap are not closed one by one
+// (one sample 1.7e9 s late made 1.7e9 empty rounds and ran out of memory); the next period starts
+// at the sample after the gap.
+TEST(RoundBuilder, PeriodModeRestartsThePeriodAfterAGap) {
+  BuilderOptions bo;
+  bo.round_period_us = kS;
+  bo.latency_us = 100 * kMs;
+  RoundBuilder b(bo);
+  std::vector<BuiltRound> rounds;
+  const auto feed = [&](double from_s, int samples) {
+    for (int i = 0; i < samples; ++i) {
+      const double t = from_s + i * 0.01;
+      EXPECT_EQ(b.add_odometry(at_s(t), SpinScenario::position(10), 0.0), "") << t;
+      for (auto& r : b.take_rounds()) rounds.push_back(r);
+    }
+  };
+  feed(10, 160);  // 10 … 11.59 s: [10, 11) closes
+  feed(1.7e6, 200);  // 1.7e6 s (19 days) later, to + 1.99 s: [1.7e6, 1.7e6 + 1) closes, the next needs + 2.1 s
+  ASSERT_EQ(rounds.size(), 2u);
+  EXPECT_EQ(rounds[0].start_utime, at_s(10));
+  EXPECT_EQ(rounds[1].start_utime, at_s(1.7e6));
+  EXPECT_EQ(rounds[1].end_utime, at_s(1.7e6 + 1));
+  EXPECT_EQ(b.counters().odometry_gaps, 1);
+  EXPECT_EQ(b.counters().rounds, 2);
+}
+
+// restart(): the odometry's clock went back (a VIO reset); the builder takes the new clock's
+// samples and builds rounds again, with its counters kept.
+TEST(RoundBuilder, RestartTakesANewClock) {
+  BuilderOptions bo;
+  bo.round_period_us = kS;
+  bo.latency_us = 100 * kMs;
+  RoundBuilder b(bo);
+  for (int i = 0; i < 120; ++i) b.add_odometry(at_s(100 + i * 0.01), SpinScenario::position(100), 0.0);
+  EXPECT_EQ(b.take_rounds().size(), 1u);
+  EXPECT_NE(b.add_odometry(at_s(5), SpinScenario::position(5), 0.0), "");  // earlier: refused
+  b.restart();
+  for (int i = 0; i < 120; ++i) EXPECT_EQ(b.add_odometry(at_s(5 + i * 0.01), SpinScenario::position(5), 0.0), "");
+  const std::vector<BuiltRound> after = b.take_rounds();
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_EQ(after[0].start_utime, at_s(5));
+  EXPECT_EQ(b.counters().restarts, 1);
+  EXPECT_EQ(b.counters().rejected_odometry, 1);
+  EXPECT_EQ(b.counters().rounds, 2);
+}
+
 TEST(RoundBuilder, HistoryIsBoundedWhileNoRoundCloses) {
   BuilderOptions bo;
   bo.max_odometry = 1000;

@@ -98,6 +98,26 @@ class Processes {
     waitpid(pids_.at(name), nullptr, 0);
     pids_.erase(name);
   }
+  // Waits up to `limit` for every process to exit by itself (then SIGKILL); the exit code of each
+  // (-1 when it did not exit normally).
+  std::map<std::string, int> wait_all(std::chrono::seconds limit) {
+    std::map<std::string, int> codes;
+    const auto end = std::chrono::steady_clock::now() + limit;
+    for (auto& [name, pid] : pids_) {
+      int status = 0;
+      while (waitpid(pid, &status, WNOHANG) == 0) {
+        if (std::chrono::steady_clock::now() >= end) {
+          kill(pid, SIGKILL);
+          waitpid(pid, &status, 0);
+          break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      codes[name] = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    pids_.clear();
+    return codes;
+  }
   // SIGTERM everything; the exit code of each (or -1 when it did not exit normally).
   std::map<std::string, int> stop_all() {
     std::map<std::string, int> codes;
@@ -415,6 +435,102 @@ TEST_F(GossipProcesses, OnlyTheGossipCrossesTheSwarmBus) {
 // two tracks go in on FACT_ODOMETRY_4 / FACT_DETECTIONS_4; the round packet it publishes (in its
 // swarm_rounds_t, alone with --min-members 1) must be exactly what fact::gossip::RoundBuilder
 // makes of the same samples. Bad input on its channels is counted, not fatal.
+// Flags that can never work exit 2 naming the flag and its value (NaN periods and 1e14 s delays
+// were converted to µs first and reported as "negative" or not named; --min-members above the
+// roster started a gossip that could never complete).
+TEST_F(GossipProcesses, BadTimesAndCountsExitTwoNamingTheFlag) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--summary-min-interval", "nan"}, "--summary-min-interval: expected a number in [0, 3600] s, got nan"},
+      {{"--settle", "1e14"}, "--settle: expected a number in [0, 3600] s, got 1e+14"},
+      {{"--answer-slot", "inf"}, "--answer-slot"},
+      {{"--round-period", "1e300"}, "--round-period"},
+      {{"--silence-timeout", "0"}, "--silence-timeout: expected a number in [0.001, 3600] s, got 0"},
+      {{"--request-interval", "-2"}, "--request-interval"},
+      {{"--summary-period", "nan"}, "--summary-period"},
+      {{"--min-members", "50", "--roster", "0,1"}, "--min-members 50 can never be reached: at most 2 drones (--roster)"},
+  };
+  for (const auto& [flags, reason] : cases) {
+    std::vector<std::string> args{FACT_GOSSIP_BINARY, "--drone-id", "0", "--lcm-url", "memq://", "--insecure"};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const std::string log = dir_ + "/bad.log";
+    std::remove(log.c_str());
+    Processes procs;
+    procs.start("gossip", args, log);
+    const std::map<std::string, int> codes = procs.wait_all(std::chrono::seconds(5));
+    EXPECT_EQ(codes.at("gossip"), 2) << flags[0];
+    const std::string text = tail(log, 5);
+    EXPECT_NE(text.find(reason), std::string::npos) << text;
+  }
+}
+
+#ifdef FACT_CLOCK_SHIFT_LIBRARY
+// Drone 1's wall clock steps back an hour, then forward two (clock_shift.c, preloaded into it
+// alone): it goes on completing rounds, and never publishes a set without the live drone 2. With
+// the gossip's timeouts on the wall clock, the step back froze it for the hour and the step
+// forward made drone 2 silent for a second (review, helper-17). A third process with drone 2's id
+// is reported by drone 2 (duplicate_drone_id).
+TEST_F(GossipProcesses, WallClockStepsNeitherFreezeNorSplitTheSwarm) {
+  const std::string url = drone_url(1);
+  Observer obs({url});
+  ASSERT_TRUE(obs.good);
+  const std::string shift = dir_ + "/clock_shift";
+  const auto step_clock = [&](const char* seconds) { std::ofstream(shift) << seconds << "\n"; };
+  step_clock("0");
+  const auto args = [&](int id) {
+    return std::vector<std::string>{FACT_GOSSIP_BINARY, "--drone-id", std::to_string(id), "--lcm-url", url,
+                                    "--insecure", "--rounds-from-channel", "--min-members", "2", "--summary-period",
+                                    "0.3", "--silence-timeout", "2", "--settle", "0.3", "--status-period", "0.2"};
+  };
+  Processes procs;
+  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
+  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
+  procs.start("gossip1", args(1), log_);
+  ::unsetenv("LD_PRELOAD");
+  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  procs.start("gossip2", args(2), log_);
+  ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
+  std::vector<fact::swarm_rounds_t> published_by_1;
+  const auto inject = [&](int round) {
+    for (int id : {1, 2}) {
+      const fact::round_packet_t m = injected(id, round);
+      obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
+    }
+  };
+  const auto complete = [&](int id, int rounds) {
+    auto it = obs.latest_rounds.find(id);
+    return it != obs.latest_rounds.end() && it->second.complete_rounds == rounds;
+  };
+  inject(0);
+  inject(1);
+  ASSERT_TRUE(obs.wait_for([&] { return complete(1, 2) && complete(2, 2); }, 5));
+  step_clock("-3600");
+  obs.spin(500);
+  inject(2);
+  EXPECT_TRUE(obs.wait_for([&] { return complete(1, 3) && complete(2, 3); }, 5))
+      << "drone 1 stopped completing rounds after its clock stepped back";
+  step_clock("3600");
+  // Every set drone 1 publishes from now on holds both drones (the latest is watched as it comes).
+  bool split = false;
+  for (int i = 0; i < 30; ++i) {
+    obs.spin(50);
+    auto it = obs.latest_rounds.find(1);
+    if (it != obs.latest_rounds.end() && it->second.num_drones != 2) split = true;
+  }
+  EXPECT_FALSE(split) << "drone 1 published a set without drone 2 after its clock stepped forward";
+  inject(3);
+  EXPECT_TRUE(obs.wait_for([&] { return complete(1, 4) && complete(2, 4); }, 5));
+  EXPECT_EQ(obs.latest_rounds[1].num_drones, 2);
+  EXPECT_EQ(content_bytes(obs.latest_rounds[1]), content_bytes(obs.latest_rounds[2]));
+
+  // Another process with drone 2's id: drone 2 sees envelopes with its id it did not send.
+  procs.start("gossip2b", args(2), log_);
+  EXPECT_TRUE(obs.wait_for([&] { return obs.counters[{"fact-gossip", 2}]["duplicate_drone_id"] > 0; }, 5))
+      << "drone 2 did not notice another process with its id";
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
+  EXPECT_NE(tail(log_, 400).find("another process uses drone id 2"), std::string::npos);
+}
+#endif
+
 TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   const std::string url = drone_url(4);
   Observer obs({url});
@@ -426,8 +542,8 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 4}}); }, 5)) << "fact-gossip is not up";
 
   fact::gossip::RoundBuilder local;  // the same defaults as fact-gossip's
-  const int64_t t_start = 1700000000000000;
-  int64_t seq = 0;
+  // One spin of odometry time from t_start, odometry seq from seq; the bad input once, mid-spin.
+  const auto spin = [&](int64_t t_start, int64_t seq, bool bad_input) {
   for (int i = 0; i <= 160; ++i) {
     const int64_t t = t_start + i * 10000;  // 100 Hz, 1.6 s of odometry time
     fact::odometry_t o{};
@@ -460,7 +576,7 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
       d.count = static_cast<int32_t>(d.detections.size());
       obs.at(0).publish("FACT_DETECTIONS_4", &d);
     }
-    if (i == 80) {  // bad input: NaN odometry, another drone's detections, a truncated envelope
+    if (i == 80 && bad_input) {  // bad input: NaN odometry, another drone's detections, a truncated envelope
       fact::odometry_t bad = o;
       bad.utime += 1;
       bad.position[1] = std::nan("");
@@ -473,7 +589,9 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
     }
     obs.spin(2);
   }
-  const std::vector<fact::gossip::BuiltRound> rounds = local.take_rounds();
+  };
+  spin(1700000000000000, 0, true);
+  std::vector<fact::gossip::BuiltRound> rounds = local.take_rounds();
   ASSERT_EQ(rounds.size(), 1u);
   ASSERT_EQ(rounds[0].data.observations.size(), 2u);
 
@@ -489,6 +607,22 @@ TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   EXPECT_EQ(c["foreign_drone"], 1);
   EXPECT_EQ(c["undecodable"], 1);
   EXPECT_EQ(c["rounds_built"], 1);
+
+  // fact-vio-relay restarts after a VIO clock reset: seq 0 and times 100 s earlier. The next spin
+  // is round 1 (the builder used to refuse every sample older than the last and build nothing).
+  local.restart();
+  spin(1700000000000000 - 100000000, 0, false);
+  rounds = local.take_rounds();
+  ASSERT_EQ(rounds.size(), 1u);
+  ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds[4].complete_rounds == 2; }, 5))
+      << "no round after the odometry restarted";
+  const fact::swarm_rounds_t& after = obs.latest_rounds[4];
+  ASSERT_EQ(after.num_packets, 2);
+  fact::gossip::Packet p1{4, 1, rounds[0].end_utime, rounds[0].data};
+  EXPECT_EQ(fact::app::encode_bytes(after.packets[1]), fact::app::encode_bytes(fact::app::packet_to_message(p1)));
+  obs.settle(0.5);
+  EXPECT_EQ(c["odometry_restarts"], 1);
+  EXPECT_EQ(c["rounds_built"], 2);
   for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name << " did not exit cleanly";
 }
 

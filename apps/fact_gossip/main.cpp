@@ -36,6 +36,7 @@
 namespace {
 
 using fact::app::channel;
+using fact::app::monotonic_us;
 using fact::app::now_us;
 
 // Every parameter, with its unit, in one place.
@@ -72,6 +73,29 @@ struct Flags {
 
 int64_t us(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e6)); }
 
+// The times and counts of the flags, in their units and one by one, before any is converted to µs
+// (1e14 s overflowed and read as "negative"; NaN passed as a period); throws FlagError naming the
+// flag and the value. Periods and timeouts are 1 ms … 1 h, delays 0 … 1 h.
+void check_times(const Flags& f) {
+  using fact::app::check_range;
+  check_range("--summary-period", f.summary_period, 0.001, 3600, "s");
+  check_range("--silence-timeout", f.silence_timeout, 0.001, 3600, "s");
+  check_range("--request-interval", f.request_interval, 0.001, 3600, "s");
+  check_range("--max-odometry-gap", f.max_odometry_gap, 0.001, 3600, "s");
+  check_range("--summary-min-interval", f.summary_min_interval, 0, 3600, "s");
+  check_range("--answer-slot", f.answer_slot, 0, 3600, "s");
+  check_range("--settle", f.settle, 0, 3600, "s");
+  check_range("--detection-latency", f.detection_latency, 0, 3600, "s");
+  if (f.round_period != 0) check_range("--round-period", f.round_period, 0.001, 3600, "s (or 0: spins)");
+  check_range("--spin-angle", f.spin_angle, 1e-3, 1e3, "rad");
+  check_range("--max-speed", f.max_speed, 0, 1e3, "m/s");
+  // Complete data holds only live drones of the roster (or of the ids tracked): more can never be.
+  const int most = f.roster.empty() ? f.max_origins : static_cast<int>(f.roster.size());
+  if (f.min_members > most)
+    throw fact::app::FlagError("--min-members " + std::to_string(f.min_members) + " can never be reached: at most " +
+                               std::to_string(most) + (f.roster.empty() ? " drones (--max-origins)" : " drones (--roster)"));
+}
+
 std::string ids_text(const std::vector<int>& ids) {
   std::string s = "[";
   for (size_t i = 0; i < ids.size(); ++i) s += (i ? "," : "") + std::to_string(ids[i]);
@@ -81,7 +105,7 @@ std::string ids_text(const std::vector<int>& ids) {
 class GossipApp {
  public:
   GossipApp(const Flags& f, const fact::gossip::Options& go, const fact::gossip::BuilderOptions& bo,
-            const fact::app::SwarmKey& key, lcm::LCM* lcm, lcm::LCM* swarm, int64_t start)
+            const fact::app::SwarmKey& key, lcm::LCM* lcm, lcm::LCM* swarm, int64_t start, int64_t first_seq)
       : f_(f),
         key_(key),
         lcm_(lcm),
@@ -90,7 +114,7 @@ class GossipApp {
         status_(lcm, f.common.status_channel, "fact-gossip", f.common.drone_id),
         gossip_(go, start),
         builder_(bo),
-        seq_(start) {
+        seq_(first_seq) {
     status_.set_period_us(us(f.common.status_period));
   }
 
@@ -107,20 +131,22 @@ class GossipApp {
   const fact::app::Log& log() const { return log_; }
 
   // Everything periodic and everything an event may have caused: rounds the builder closed, the
-  // gossip's messages, completion, logs, status.
+  // gossip's messages, completion, logs, status. `now` is monotonic_us(): every interval and
+  // timeout of the gossip runs on it (a wall-clock step back froze the gossip for the step, one
+  // forward made every peer silent); messages are stamped with now_us().
   void step(int64_t now) {
     for (auto& r : builder_.take_rounds()) {
       const std::string e = gossip_.add_own_round(now, r.end_utime, r.data);
       if (!e.empty()) reject("own_round_refused", "own round refused: " + e);
     }
-    for (const auto& out : gossip_.tick(now)) send(out, now);
+    for (const auto& out : gossip_.tick(now)) send(out);
     publish_complete(now);
     for (const std::string& line : gossip_.take_events()) {
       log_.event(line);
       status_.note(line);
     }
     if (now - last_status_ >= status_.period_us()) update_status(now);
-    status_.tick(now);
+    status_.tick(now_us());
   }
 
   int64_t next_deadline(int64_t now) const {
@@ -137,7 +163,7 @@ class GossipApp {
     if (p == n) log_.event(line + " [" + counter + " = " + std::to_string(n) + "]");
   }
 
-  void send(const fact::gossip::Outgoing& out, int64_t now) {
+  void send(const fact::gossip::Outgoing& out) {
     std::vector<uint8_t> payload;
     int8_t kind = 0;
     switch (out.kind) {
@@ -146,15 +172,16 @@ class GossipApp {
         kind = fact::gossip_packet_t::ROUND;
         break;
       case fact::gossip::Outgoing::Kind::summary:
-        payload = fact::app::encode_bytes(fact::app::summary_to_message(out.summary, now));
+        payload = fact::app::encode_bytes(fact::app::summary_to_message(out.summary, now_us()));
         kind = fact::gossip_packet_t::SUMMARY;
         break;
       case fact::gossip::Outgoing::Kind::request:
-        payload = fact::app::encode_bytes(fact::app::request_to_message(out.request, now));
+        payload = fact::app::encode_bytes(fact::app::request_to_message(out.request, now_us()));
         kind = fact::gossip_packet_t::REQUEST;
         break;
     }
-    const fact::gossip_packet_t env = fact::app::make_envelope(f_.common.drone_id, seq_++, kind, std::move(payload), now, key_);
+    const fact::gossip_packet_t env =
+        fact::app::make_envelope(f_.common.drone_id, seq_++, kind, std::move(payload), now_us(), key_);
     const int size = env.getEncodedSize();
     if (swarm_->publish(f_.gossip_channel, &env) != 0) {
       reject("publish_failed", "publishing on " + f_.gossip_channel + " failed");
@@ -168,7 +195,7 @@ class GossipApp {
     const fact::gossip::Completion c = gossip_.completion(now);
     if (!c.ready || (c.rounds == published_rounds_ && c.drones == published_drones_)) return;
     fact::swarm_rounds_t m;
-    m.utime = now;
+    m.utime = now_us();
     m.drone_id = f_.common.drone_id;
     m.complete_rounds = c.rounds;
     m.num_drones = static_cast<int32_t>(c.drones.size());
@@ -209,8 +236,16 @@ class GossipApp {
   void on_gossip(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
     fact::gossip_packet_t env;
     if (!fact::app::decode(rbuf, chan, &env, &status_, log_)) return;
-    const int64_t now = now_us();
-    if (env.sender_id == f_.common.drone_id) return;  // our own packet, looped back by multicast
+    const int64_t now = monotonic_us();
+    if (env.sender_id == f_.common.drone_id) {
+      // Our own packets come back by multicast loopback, numbered first_seq_ … seq_ − 1; any
+      // other number is another process using this drone id.
+      if (env.seq < first_seq_ || env.seq >= seq_)
+        reject("duplicate_drone_id", "envelope seq " + std::to_string(env.seq) + " with this drone's id " +
+                                         std::to_string(f_.common.drone_id) + " was not sent by this process: another "
+                                         "process uses drone id " + std::to_string(f_.common.drone_id));
+      return;
+    }
     if (env.payload_size < 0 || static_cast<size_t>(env.payload_size) != env.payload.size()) {
       reject("undecodable", "envelope from drone " + std::to_string(env.sender_id) + ": payload_size " +
                                 std::to_string(env.payload_size) + " ≠ payload bytes");
@@ -232,7 +267,17 @@ class GossipApp {
       if (screen == fact::gossip::Screen::unknown_id || screen == fact::gossip::Screen::table_full)
         reject("envelopes_refused", "envelope from drone " + std::to_string(env.sender_id) + " refused: " +
                                         fact::gossip::to_string(screen));
-      return;  // duplicates and replays are counted by the gossip (duplicate_envelopes, replayed)
+      // Duplicates and replays are counted by the gossip (duplicate_envelopes, replayed); replays
+      // are logged too (the first 10, then every 100th): a restarted drone whose clock went back
+      // is refused until its clock passes its old numbers.
+      if (screen == fact::gossip::Screen::replay) {
+        const int64_t n = gossip_.counters().replayed;
+        if (n <= 10 || n % 100 == 0)
+          log_.event("envelope from drone " + std::to_string(env.sender_id) + " seq " + std::to_string(env.seq) +
+                     " is older than its replay window: dropped (replayed = " + std::to_string(n) +
+                     "; a drone restarted with its clock set back is refused until its clock passes its old numbers)");
+      }
+      return;
     }
     std::string err;
     const void* data = env.payload.data();
@@ -266,6 +311,13 @@ class GossipApp {
     }
   }
 
+  // A sample the builder refused (it counts it): noted, and logged the first 10 times, then every
+  // 100th (refused odometry used to go to the status note only, silently).
+  void note_refusal(const std::string& what, int64_t n, const std::string& line) {
+    status_.note(line);
+    if (n <= 10 || n % 100 == 0) log_.event(line + " (" + what + " = " + std::to_string(n) + ")");
+  }
+
   void log_limited(const std::string& line) {
     ++refusals_;
     int64_t p = 1;
@@ -278,7 +330,7 @@ class GossipApp {
     if (!fact::app::decode(rbuf, chan, &m, &status_, log_)) return;
     fact::gossip::Packet p;
     std::string err = fact::app::packet_from_message(m, &p);
-    if (err.empty()) err = gossip_.add_own_packet(now_us(), p);
+    if (err.empty()) err = gossip_.add_own_packet(monotonic_us(), p);
     if (err == "duplicate") return;
     if (!err.empty()) reject("own_round_refused", "round packet on " + chan + " refused: " + err);
     else log_.event("own round " + std::to_string(p.round) + " taken from " + chan + " (" +
@@ -290,8 +342,17 @@ class GossipApp {
     if (!fact::app::decode(rbuf, chan, &m, &status_, log_)) return;
     if (m.drone_id != f_.common.drone_id)
       return reject("foreign_drone", "odometry of drone " + std::to_string(m.drone_id) + " on " + chan + " ignored");
+    if (odometry_seen_ && m.seq < odometry_seq_) {
+      // fact-vio-relay restarts its stream at seq 0 after a VIO clock reset: the builder starts
+      // again on the new clock (it refused every earlier-stamped sample, and no round closed again).
+      builder_.restart();
+      log_.event("odometry seq went back (" + std::to_string(odometry_seq_) + " → " + std::to_string(m.seq) +
+                 ", utime " + std::to_string(m.utime) + "): the odometry restarted; round building starts again");
+    }
+    odometry_seen_ = true;
+    odometry_seq_ = m.seq;
     const std::string e = builder_.add_odometry(m.utime, Eigen::Vector3d(m.position[0], m.position[1], m.position[2]), m.yaw);
-    if (!e.empty()) status_.note(e);
+    if (!e.empty()) note_refusal("rejected_odometry", builder_.counters().rejected_odometry, e);
   }
 
   void on_detections(const lcm::ReceiveBuffer* rbuf, const std::string& chan) {
@@ -301,7 +362,9 @@ class GossipApp {
       return reject("foreign_drone", "detections of drone " + std::to_string(m.drone_id) + " on " + chan + " ignored");
     for (const auto& d : m.detections) {
       const std::string e = builder_.add_detection(m.utime, d.track_id, Eigen::Vector3d(d.vector[0], d.vector[1], d.vector[2]));
-      if (!e.empty()) status_.note(e);
+      if (!e.empty())
+        note_refusal("refused_detections",
+                     builder_.counters().rejected_detections + builder_.counters().late_detections, e);
     }
   }
 
@@ -314,6 +377,9 @@ class GossipApp {
   fact::gossip::Gossip gossip_;
   fact::gossip::RoundBuilder builder_;
   int64_t seq_;
+  const int64_t first_seq_ = seq_;  // our first envelope's number (seq_ is the next one's)
+  bool odometry_seen_ = false;
+  int64_t odometry_seq_ = 0;        // the newest odometry sample's seq
   int published_rounds_ = 0;
   std::vector<int> published_drones_;
   int64_t last_status_ = 0;
@@ -415,11 +481,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  for (double v : {f.summary_period, f.silence_timeout, f.request_interval})
-    if (!(v > 0) || !std::isfinite(v)) {
-      boot.event("periods and timeouts must be > 0 s");
-      return 2;
-    }
+  try {
+    check_times(f);
+  } catch (const fact::app::FlagError& e) {
+    boot.event(std::string("error: ") + e.what());
+    return 2;
+  }
 
   fact::gossip::Options go;
   go.self_id = f.common.drone_id;
@@ -468,8 +535,9 @@ int main(int argc, char** argv) {
   lcm::LCM* swarm = swarm_bus ? swarm_bus.get() : &lcm;
   fact::app::install_stop_handler();
   if (!fact::app::start_clock(lcm, f.common, boot)) return 1;
-  const int64_t start = now_us();
-  GossipApp app(f, go, bo, key, &lcm, swarm, start);
+  // The gossip's clock is monotonic_us(); envelope numbers start at the wall (or simulated) time
+  // in µs, so a restarted sender's numbers exceed its old ones.
+  GossipApp app(f, go, bo, key, &lcm, swarm, monotonic_us(), now_us());
   app.subscribe();
   app.log().event(std::string("started: ") + (key.insecure ? "INSECURE (no authentication)" : "authenticated") +
                   ", roster " + (f.roster.empty() ? "open" : ids_text(f.roster)) + ", rounds from " +
@@ -485,7 +553,7 @@ int main(int argc, char** argv) {
         app.step(now);
         return app.next_deadline(now);
       },
-      swarm_bus ? std::vector<lcm::LCM*>{swarm_bus.get()} : std::vector<lcm::LCM*>{});
+      swarm_bus ? std::vector<lcm::LCM*>{swarm_bus.get()} : std::vector<lcm::LCM*>{}, &monotonic_us);
   if (rc != 0) {
     app.log().event("LCM failed: stopping");
     return 1;
