@@ -15,6 +15,9 @@
 #            serial:DEV[:BAUD]     MAVLink over a serial port (default 921600 bit/s)
 #   --key FILE               the swarm key for fact-gossip (32 raw bytes or 64 hex digits, mode 600);
 #                            --insecure runs without one (bench tests only)
+#   --session NAME           this flight's name for fact-gossip (the same on every drone, new for
+#                            each flight): a recording of another flight's gossip then fails
+#                            authentication (needs --key)
 # Other flags: --roster IDS (the swarm's ids, comma separated), --lcm-url URL (the drone's own
 # bus; default: LCM's default), --swarm-url URL (the swarm's bus, for the gossip only; default:
 # --lcm-url). Best: --lcm-url with ttl=0 (stays on the drone's computer) and --swarm-url with
@@ -36,7 +39,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$here/scripts/lib/args.sh"
 
 die() { echo "run-drone: $*" >&2; echo "run-drone: see --help" >&2; exit 2; }
-id="" camera="" vio="" fc="" key="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
+id="" camera="" vio="" fc="" key="" session="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
 check_only=0 build=1 preflight_timeout=10 swarm_url="" noise_quadratic=""
 while [ "$#" -gt 0 ]; do
   case "$1" in
@@ -47,6 +50,7 @@ while [ "$#" -gt 0 ]; do
     --fc) [ "$#" -ge 2 ] || die "--fc needs a value"; fc=$2; shift 2 ;;
     --key) [ "$#" -ge 2 ] || die "--key needs a value"; key=$2; shift 2 ;;
     --insecure) insecure=1; shift ;;
+    --session) [ "$#" -ge 2 ] || die "--session needs a value"; session=$2; shift 2 ;;
     --roster) [ "$#" -ge 2 ] || die "--roster needs a value"; roster=$2; shift 2 ;;
     --lcm-url) [ "$#" -ge 2 ] || die "--lcm-url needs a value"; lcm_url=$2; shift 2 ;;
     --swarm-url) [ "$#" -ge 2 ] || die "--swarm-url needs a value"; swarm_url=$2; shift 2 ;;
@@ -66,6 +70,7 @@ done
 [ -n "$fc" ] || die "--fc is required (udp:LOCAL:HOST:PORT or serial:DEV[:BAUD])"
 [ "$insecure" = 1 ] || [ -n "$key" ] || die "--key FILE is required (or --insecure for bench tests)"
 [ "$insecure" = 0 ] || [ -z "$key" ] || die "--key and --insecure exclude each other"
+[ -z "$session" ] || [ -n "$key" ] || die "--session needs --key (a session names a flight of an authenticated swarm)"
 [ -z "$roster" ] || [[ "$roster" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
 [[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--preflight-timeout: expected seconds, got '$preflight_timeout'"
 [ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
@@ -154,6 +159,7 @@ fi
 [ "$check_only" = 1 ] && { echo "run-drone: --check-only: the checklist passed"; exit 0; }
 gossip_flags=("${keyflag[@]}")
 [ -n "$roster" ] && gossip_flags+=(--roster "$roster")
+[ -n "$session" ] && gossip_flags+=(--session "$session")
 [ -n "$swarm_url" ] && gossip_flags+=(--swarm-url "$swarm_url")
 start fact-gossip "$B/apps/fact-gossip$x" "${common[@]}" "${gossip_flags[@]}"
 start fact-solver "$B/apps/fact-solver$x" "${common[@]}" ${noise_quadratic:+--noise-quadratic "$noise_quadratic"}

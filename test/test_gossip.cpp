@@ -867,6 +867,30 @@ TEST(GossipWire, KeyFilesRawOrHex) {
   EXPECT_NE(load_key("/nonexistent/swarm.key", &k), "");
 }
 
+// --session: the key of a session authenticates that session's envelopes only, so a recording of
+// an earlier flight (same swarm key, another session) fails authentication.
+TEST(GossipWire, SessionsDeriveDistinctKeys) {
+  ASSERT_EQ(init_crypto(), "");
+  SwarmKey a = key_of(7), b = key_of(7), same = key_of(7);
+  ASSERT_EQ(apply_session("flight-2026-11-27.1", &a), "");
+  ASSERT_EQ(apply_session("flight-2026-11-27.2", &b), "");
+  ASSERT_EQ(apply_session("flight-2026-11-27.1", &same), "");
+  EXPECT_EQ(a.bytes, same.bytes);
+  EXPECT_NE(a.bytes, b.bytes);
+  EXPECT_NE(a.bytes, key_of(7).bytes);
+  const gossip_packet_t m = make_envelope(3, 1700000000000001, gossip_packet_t::SUMMARY, {1, 2, 3, 4}, 55, a);
+  EXPECT_TRUE(verify(m, same));
+  EXPECT_FALSE(verify(m, b));
+  EXPECT_FALSE(verify(m, key_of(7)));  // nor without a session
+  SwarmKey k = key_of(7);
+  EXPECT_NE(apply_session("", &k).find("0 characters"), std::string::npos);
+  EXPECT_NE(apply_session(std::string(65, 'x'), &k).find("65 characters"), std::string::npos);
+  EXPECT_NE(apply_session("two words", &k).find("' '"), std::string::npos);
+  EXPECT_EQ(k.bytes, key_of(7).bytes);  // refused names leave the key as it was
+  SwarmKey none;  // insecure
+  EXPECT_NE(apply_session("x", &none).find("--insecure"), std::string::npos);
+}
+
 TEST(GossipWire, EnvelopesAuthenticateAndAlterationsFail) {
   ASSERT_EQ(init_crypto(), "");
   const SwarmKey key = key_of(7), other = key_of(8);

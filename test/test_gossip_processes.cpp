@@ -17,6 +17,7 @@
 #include "fact/app_status_t.hpp"
 #include "fact/detections_t.hpp"
 #include "fact/gossip.h"
+#include "fact/gossip_packet_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "fact/round_packet_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
@@ -530,6 +531,73 @@ TEST_F(GossipProcesses, WallClockStepsNeitherFreezeNorSplitTheSwarm) {
   EXPECT_NE(tail(log_, 400).find("another process uses drone id 2"), std::string::npos);
 }
 #endif
+
+// A recording of one flight's gossip (session A), played on the bus of a later flight with the same
+// swarm key, is refused by a fresh gossip of session B (auth_failed), where a fresh gossip of
+// session A takes drone 2's rounds from it (review, helper-17: without sessions the recording
+// replaced a drone's real rounds on every drone).
+TEST_F(GossipProcesses, ARecordingOfAnotherSessionIsRefused) {
+  const std::string url = drone_url(3);
+  Observer obs({url});
+  ASSERT_TRUE(obs.good);
+  lcm::LCM recorder(url);
+  ASSERT_TRUE(recorder.good());
+  std::vector<std::string> recorded;  // drone 2's envelopes, as sent
+  struct Sink {
+    std::vector<std::string>* out;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fact::gossip_packet_t m;
+      if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) == static_cast<int>(rbuf->data_size) &&
+          m.sender_id == 2)
+        out->emplace_back(static_cast<const char*>(rbuf->data), rbuf->data_size);
+    }
+  } sink{&recorded};
+  recorder.subscribe("FACT_GOSSIP", &Sink::on, &sink)->setQueueCapacity(100000);
+  const auto args = [&](int id, const std::string& session) {
+    return std::vector<std::string>{FACT_GOSSIP_BINARY, "--drone-id", std::to_string(id), "--lcm-url", url,
+                                    "--key-file", dir_ + "/swarm.key", "--session", session, "--rounds-from-channel",
+                                    "--min-members", "2", "--settle", "0.3", "--status-period", "0.2"};
+  };
+  {
+    Processes flight_a;
+    flight_a.start("gossip1", args(1, "A"), log_);
+    flight_a.start("gossip2", args(2, "A"), log_);
+    ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
+    for (int round : {0, 1})
+      for (int id : {1, 2}) {
+        const fact::round_packet_t m = injected(id, round);
+        obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
+      }
+    ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds.count(1) && obs.latest_rounds[1].complete_rounds == 2; }, 5));
+    for (const auto& [name, code] : flight_a.stop_all()) EXPECT_EQ(code, 0) << name;
+  }
+  while (recorder.handleTimeout(0) > 0) {
+  }
+  ASSERT_GT(recorded.size(), 2u);
+  // A fresh drone 1 of `session` hears the recording: what it counts and holds of drone 2.
+  const auto replay_to = [&](const std::string& session) {
+    obs.states.clear();
+    obs.counters.clear();
+    Processes later;
+    later.start("gossip1", args(1, session), log_);
+    EXPECT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}}); }, 5));
+    for (const std::string& bytes : recorded) {
+      obs.at(0).publish("FACT_GOSSIP", bytes.data(), static_cast<unsigned>(bytes.size()));
+      obs.spin(2);
+    }
+    obs.settle(0.6);
+    const std::string state = obs.states[{"fact-gossip", 1}];
+    const int64_t auth_failed = obs.counters[{"fact-gossip", 1}]["auth_failed"];
+    for (const auto& [name, code] : later.stop_all()) EXPECT_EQ(code, 0) << name;
+    return std::make_pair(state, auth_failed);
+  };
+  const auto [state_b, failed_b] = replay_to("B");
+  EXPECT_EQ(failed_b, static_cast<int64_t>(recorded.size())) << state_b;
+  EXPECT_EQ(state_b.find(" 2:"), std::string::npos) << "session B took drone 2's old rounds: " << state_b;
+  const auto [state_a, failed_a] = replay_to("A");
+  EXPECT_EQ(failed_a, 0) << state_a;
+  EXPECT_NE(state_a.find(" 2:2"), std::string::npos) << "the control did not take the recording: " << state_a;
+}
 
 TEST_F(GossipProcesses, BuildsARoundFromASpinAndCountsBadInput) {
   const std::string url = drone_url(4);

@@ -44,6 +44,7 @@ struct Flags {
   fact::app::CommonFlags common;            // --drone-id (required), --lcm-url, status, --sim-clock
   std::string key_file;                     // swarm key: 32 raw bytes or 64 hex digits
   bool insecure = false;                    // no key: zero macs, nothing checked
+  std::string session;                      // this flight's name, mixed into the key ("" = none)
   std::vector<int> roster;                  // the swarm's ids (empty: any id 0 … max_drone_id)
   int max_drone_id = 9999;
   int min_members = 2;                      // complete data needs at least this many drones
@@ -397,6 +398,11 @@ int main(int argc, char** argv) {
                  "Swarm key: a file of exactly 32 raw bytes or 64 hex digits (whitespace ignored); required unless "
                  "--insecure")->type_name("FILE");
   cli.add_flag("--insecure", f.insecure, "No authentication: zero macs are sent and nothing is checked");
+  cli.add_option("--session", f.session,
+                 "This flight's name (1-64 of A-Z a-z 0-9 . _ : -), the same on every drone and new for each flight: "
+                 "mixed into the key, so a recording of another flight's gossip fails authentication (needs "
+                 "--key-file)")
+      ->type_name("NAME");
   cli.add_option("--roster", f.roster, "The swarm's drone ids (comma separated); others are refused. Default: any id "
                                        "0 … --max-drone-id")->delimiter(',');
   cli.add_option("--max-drone-id", f.max_drone_id, "Without a roster, ids above this are refused")->capture_default_str();
@@ -481,6 +487,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (cli.count("--session") > 0) {
+    if (std::string e = fact::app::apply_session(f.session, &key); !e.empty()) {
+      boot.event("error: --session: " + e);
+      return 2;
+    }
+  }
   try {
     check_times(f);
   } catch (const fact::app::FlagError& e) {
@@ -540,6 +552,7 @@ int main(int argc, char** argv) {
   GossipApp app(f, go, bo, key, &lcm, swarm, monotonic_us(), now_us());
   app.subscribe();
   app.log().event(std::string("started: ") + (key.insecure ? "INSECURE (no authentication)" : "authenticated") +
+                  (f.session.empty() ? "" : " in session " + f.session) +
                   ", roster " + (f.roster.empty() ? "open" : ids_text(f.roster)) + ", rounds from " +
                   (f.rounds_from_channel ? f.round_channel
                                          : f.odometry_channel + " + " + f.detections_channel +

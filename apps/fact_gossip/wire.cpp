@@ -4,6 +4,8 @@
 
 #include <sodium.h>
 
+#include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -55,6 +57,21 @@ std::string load_key(const std::string& path, SwarmKey* key) {
   if (contents.size() > 4096) return path + ": " + std::to_string(contents.size()) + " bytes, too large for a key file";
   std::string e = parse_key(contents, key);
   return e.empty() ? "" : path + ": " + e;
+}
+
+std::string apply_session(const std::string& session, SwarmKey* key) {
+  if (key->insecure) return "a session needs a swarm key (--key-file), not --insecure";
+  if (session.empty() || session.size() > 64)
+    return "session \"" + session + "\" has " + std::to_string(session.size()) + " characters (1 … 64)";
+  for (char c : session)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != ':' && c != '-')
+      return "session \"" + session + "\": the character '" + std::string(1, std::isprint(static_cast<unsigned char>(c)) ? c : '?') +
+             "' is not one of A-Z a-z 0-9 . _ : -";
+  const std::string label = "fact-gossip session " + session;
+  std::array<unsigned char, crypto_auth_BYTES> derived{};
+  crypto_auth(derived.data(), reinterpret_cast<const unsigned char*>(label.data()), label.size(), key->bytes.data());
+  std::copy(derived.begin(), derived.end(), key->bytes.begin());
+  return "";
 }
 
 std::vector<unsigned char> mac_input(const fact::gossip_packet_t& m) {

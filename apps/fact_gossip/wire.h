@@ -11,6 +11,11 @@
 // Every field has a fixed width, so the concatenation is unambiguous. utime is not covered (it is
 // informative only). With --insecure the mac is all zero and receivers check nothing.
 //
+// Session (--session S, with a key): the key becomes crypto_auth("fact-gossip session " + S, key),
+// so envelopes of another session (a recording of an earlier flight played on the swarm's bus)
+// fail authentication. Without --session the key is used as it is, and envelopes of earlier
+// flights with the same key are accepted by a process that has not heard the sender yet.
+//
 // Key file (--key-file F): either exactly 32 bytes (raw key) or 64 hexadecimal digits (upper or
 // lower case; whitespace and line breaks anywhere are ignored). An all-zero key is refused.
 // Make one with: head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' > swarm.key
@@ -41,6 +46,9 @@ std::string init_crypto();
 std::string parse_key(const std::string& contents, SwarmKey* key);
 // Reads and parses the file; "" or the reason (unreadable, wrong size, not hex, all zero).
 std::string load_key(const std::string& path, SwarmKey* key);
+// Derives the session's key (see the header comment); "" or why the session name is unusable
+// (1 … 64 characters of A–Z a–z 0–9 . _ : -, and a real key).
+std::string apply_session(const std::string& session, SwarmKey* key);
 
 // The bytes the mac covers.
 std::vector<unsigned char> mac_input(const fact::gossip_packet_t& m);
