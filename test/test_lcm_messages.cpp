@@ -332,6 +332,21 @@ TEST(AppStatus, PublishesCountersAsAppStatus) {
   EXPECT_EQ(heartbeat.published(), 5);
 }
 
+// An odometry stream restarts (fact-vio-relay's seq 0 after a VIO clock reset, or a restarted
+// relay) when its seq goes back to 0, by more than 64, or with a time over 1 s earlier; one
+// datagram reordered by UDP is not a restart.
+TEST(AppCommon, OdometryRestartIsNotAReorderedDatagram) {
+  using fact::app::odometry_restarted;
+  const int64_t t = 5000000000;  // µs
+  EXPECT_FALSE(odometry_restarted(500, t, 501, t + 10000));     // the next one
+  EXPECT_FALSE(odometry_restarted(500, t, 499, t - 10000));     // reordered
+  EXPECT_FALSE(odometry_restarted(500, t, 437, t - 630000));    // reordered by 63
+  EXPECT_TRUE(odometry_restarted(500, t, 0, t + 10000));        // seq 0, whatever the time
+  EXPECT_TRUE(odometry_restarted(500, t, 400, t + 10000));      // back by 100
+  EXPECT_TRUE(odometry_restarted(500, t, 499, t - 7200000000)); // the time 2 h earlier (seq 0 … lost)
+  EXPECT_FALSE(odometry_restarted(500, t, 500, t - 7200000000)); // not back: out of order, not a restart
+}
+
 TEST(AppCommon, ChannelNames) {
   EXPECT_EQ(app::channel("FACT_ODOMETRY", 3), "FACT_ODOMETRY_3");
   EXPECT_EQ(app::channel("FACT_RESULT", 0), "FACT_RESULT_0");

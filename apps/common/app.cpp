@@ -127,6 +127,12 @@ void Status::set_state(const std::string& s) { state_ = s; }
 void Status::note(const std::string& message) { message_ = message; }
 void Status::set_period_us(int64_t period_us) { period_us_ = period_us > 0 ? period_us : 1; }
 
+bool odometry_restarted(int64_t last_seq, int64_t last_utime, int64_t seq, int64_t utime) {
+  constexpr int64_t kReorderSamples = 64, kReorderUs = 1000000;
+  if (seq >= last_seq) return false;
+  return seq == 0 || last_seq - seq > kReorderSamples || utime < last_utime - kReorderUs;
+}
+
 void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line) {
   status.count(counter);
   const int64_t n = status.value(counter);

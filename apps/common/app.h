@@ -153,6 +153,13 @@ std::string decode_error(const void* data, int size, T* msg) {
   }
 }
 
+// Whether an odometry sample (seq, utime µs) after the newest one taken (last_seq, last_utime)
+// starts a new stream: fact-vio-relay restarted (seq 0 again after a VIO clock reset, or the relay
+// itself restarted). A seq going back counts when it is 0, goes back more than UDP reordering can
+// (64 samples), or comes with a time more than 1 s earlier; one reordered datagram (a seq and a
+// time just below the newest) is not a restart, and the caller refuses it as out of order.
+bool odometry_restarted(int64_t last_seq, int64_t last_utime, int64_t seq, int64_t utime);
+
 // Counts one event on `counter` and logs "<line> (<counter> = <total>)": the first 10, then every
 // 100th, so that a flood of bad input cannot flood the log.
 void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line);

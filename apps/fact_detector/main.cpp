@@ -193,16 +193,18 @@ class AttitudeBuffer {
 
   enum class Push { accepted, restarted, not_later, too_far_ahead };
 
-  // A sample with its odometry seq. A seq going back is the relay's restart (its clock was reset):
-  // the buffer starts again. A sample not later than the newest, or more than kMaxGapUs after it,
+  // A sample with its odometry seq. A seq going back to 0, by more than reordering can, or with a
+  // time over 1 s earlier (fact::app::odometry_restarted) is the relay's restart (its clock was
+  // reset): the buffer starts again. A sample not later than the newest, or more than kMaxGapUs after it,
   // is refused; kRestartRun refused samples in a row, each later than the one before and within
   // kMaxGapUs of it, are a new clock too and start the buffer again (one glitched sample far
   // ahead used to freeze the attitude for good, and a VIO clock reset lost every later sample).
   Push push(const Attitude& a, int64_t seq) {
-    const bool seq_back = have_seq_ && seq < last_seq_;
+    const bool restarted = have_seq_ && !samples_.empty() &&
+                           fact::app::odometry_restarted(last_seq_, samples_.back().utime, seq, a.utime);
+    if (!have_seq_ || seq > last_seq_ || restarted) last_seq_ = seq;  // (not lowered by a reordered one)
     have_seq_ = true;
-    last_seq_ = seq;
-    if (seq_back) return restart({a});
+    if (restarted) return restart({a});
     if (samples_.empty() || (a.utime > samples_.back().utime && a.utime - samples_.back().utime <= kMaxGapUs)) {
       run_.clear();
       samples_.push_back(a);

@@ -343,15 +343,19 @@ class GossipApp {
     if (!fact::app::decode(rbuf, chan, &m, &status_, log_)) return;
     if (m.drone_id != f_.common.drone_id)
       return reject("foreign_drone", "odometry of drone " + std::to_string(m.drone_id) + " on " + chan + " ignored");
-    if (odometry_seen_ && m.seq < odometry_seq_) {
+    const bool restarted = odometry_seen_ && fact::app::odometry_restarted(odometry_seq_, odometry_utime_, m.seq, m.utime);
+    if (restarted) {
       // fact-vio-relay restarts its stream at seq 0 after a VIO clock reset: the builder starts
       // again on the new clock (it refused every earlier-stamped sample, and no round closed again).
       builder_.restart();
       log_.event("odometry seq went back (" + std::to_string(odometry_seq_) + " → " + std::to_string(m.seq) +
                  ", utime " + std::to_string(m.utime) + "): the odometry restarted; round building starts again");
     }
+    if (!odometry_seen_ || m.seq > odometry_seq_ || restarted) {  // (a reordered one does not lower it)
+      odometry_seq_ = m.seq;
+      odometry_utime_ = m.utime;
+    }
     odometry_seen_ = true;
-    odometry_seq_ = m.seq;
     const std::string e = builder_.add_odometry(m.utime, Eigen::Vector3d(m.position[0], m.position[1], m.position[2]), m.yaw);
     if (!e.empty()) note_refusal("rejected_odometry", builder_.counters().rejected_odometry, e);
   }
@@ -380,7 +384,8 @@ class GossipApp {
   int64_t seq_;
   const int64_t first_seq_ = seq_;  // our first envelope's number (seq_ is the next one's)
   bool odometry_seen_ = false;
-  int64_t odometry_seq_ = 0;        // the newest odometry sample's seq
+  int64_t odometry_seq_ = 0;        // the newest odometry sample's seq and utime (µs)
+  int64_t odometry_utime_ = 0;
   int published_rounds_ = 0;
   std::vector<int> published_drones_;
   int64_t last_status_ = 0;

@@ -264,12 +264,13 @@ class Planner {
       return reject("rejected_nan", "odometry seq " + std::to_string(m.seq) + " has a non-finite field");
     if (std::string why = odometry_out_of_range(m); !why.empty())
       return reject("rejected_range", "odometry seq " + std::to_string(m.seq) + ": " + why);
-    // seq going back: fact-vio-relay restarted its stream (seq 0) or was restarted, and its times
-    // may start over. The buffer starts again with it; otherwise every later sample was out of
-    // order and the drone hovered on stale odometry for good (review, session 30). (Not only seq 0:
-    // that one message may be lost; and seq 0 again with an earlier time when the restart came
-    // right after the first sample.)
-    if (!poses_.empty() && (m.seq < last_seq_ || (m.seq == 0 && m.utime < poses_.newest().utime))) {
+    // fact-vio-relay restarted its stream (seq 0) or was restarted, and its times may start over
+    // (fact::app::odometry_restarted). The buffer starts again with it; otherwise every later
+    // sample was out of order and the drone hovered on stale odometry for good (review, session
+    // 30). (Not only seq 0: that one message may be lost; and seq 0 again with an earlier time when
+    // the restart came right after the first sample.) One reordered datagram is not a restart.
+    if (!poses_.empty() && (fact::app::odometry_restarted(last_seq_, poses_.newest().utime, m.seq, m.utime) ||
+                            (m.seq == 0 && m.utime < poses_.newest().utime))) {
       status_.count("odometry_restarts");
       log_.event("odometry restarted (seq " + std::to_string(m.seq) + " after " + std::to_string(last_seq_) + ", utime " +
                  std::to_string(m.utime) + " us after " + std::to_string(poses_.newest().utime) +
