@@ -836,12 +836,16 @@ bool RoundBuilder::moving() const {
 void RoundBuilder::close_if_spun() {
   const Odo& last = odo_.back();
   if (opt_.round_period_us > 0) {
-    // A gap in the odometry: the period it interrupted has no odometry to close on, and closing
-    // one empty round per period inside it made millions (a boot clock becoming Unix time ran out
-    // of memory); the next period starts at this sample.
+    // A gap in the odometry: the period it interrupted closes with the data it has, and the empty
+    // periods inside the gap are skipped in one step, keeping the period boundaries (closing one
+    // empty round per period made millions: a boot clock becoming Unix time ran out of memory).
     if (odo_.size() >= 2 && last.t - odo_[odo_.size() - 2].t > opt_.max_odometry_gap_us) {
       ++counters_.odometry_gaps;
-      open_start_ = last.t;
+      if (last.t >= open_start_ + opt_.round_period_us) {
+        closing_.push_back({open_start_, open_start_ + opt_.round_period_us});
+        open_start_ += opt_.round_period_us;
+        open_start_ += opt_.round_period_us * ((last.t - open_start_) / opt_.round_period_us);
+      }
       return;
     }
     while (last.t >= open_start_ + opt_.round_period_us) {

@@ -93,6 +93,10 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
     j << "{\"width\": 640, \"height\": 480, \"fx\": 387, \"fy\": 387, \"cx\": 321, \"cy\": 243}\n";
     std::ofstream tum(dir_ / "png" / "odometry.tum");  // level, heading +x, for 2 s
     for (int i = 0; i <= 200; ++i) tum << 1000.0 + i * 0.01 << " 0 0 1 0 0 0 1\n";
+    // After a 18 s pause in the recording, pitched 0.3 rad about y: a pause in a file is not a new
+    // clock, the frames before it keep their level attitude (all 231 samples are taken).
+    for (int i = 0; i < 30; ++i)
+      tum << 1020.0 + i * 0.01 << " 0 0 1 0 " << std::sin(0.15) << " 0 " << std::cos(0.15) << "\n";
   }
   // A drone-sized blob (0.40 × 0.08 m) at z = 3 m, 0.5 m left of the axis, in front of a wall at 7 m.
   const double z = 3.0, x = -0.5;
@@ -172,6 +176,7 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
   EXPECT_EQ(counter("published"), frames);
   EXPECT_NE(err.find("size_mismatch"), std::string::npos) << err;
   EXPECT_NE(err.find("gray 640 x 480, depth 320 x 240"), std::string::npos) << err;
+  EXPECT_NE(err.find("231 odometry samples"), std::string::npos) << err;
 }
 
 TEST_F(DetectorApp, FlagsAndModelErrors) {

@@ -768,9 +768,9 @@ TEST(RoundBuilder, PeriodModeAndBadSamples) {
   EXPECT_EQ(b.counters().late_detections, 1);
 }
 
-// Period mode across a gap in the odometry: the periods inside the gap are not closed one by one
-// (one sample 1.7e9 s late made 1.7e9 empty rounds and ran out of memory); the next period starts
-// at the sample after the gap.
+// Period mode across a gap in the odometry: the period the gap interrupted closes with its data,
+// the empty periods inside the gap are skipped, not closed one by one (one sample 1.7e9 s late
+// made 1.7e9 empty rounds and ran out of memory), and the period boundaries stay where they were.
 TEST(RoundBuilder, PeriodModeRestartsThePeriodAfterAGap) {
   BuilderOptions bo;
   bo.round_period_us = kS;
@@ -785,13 +785,19 @@ TEST(RoundBuilder, PeriodModeRestartsThePeriodAfterAGap) {
     }
   };
   feed(10, 160);  // 10 … 11.59 s: [10, 11) closes
-  feed(1.7e6, 200);  // 1.7e6 s (19 days) later, to + 1.99 s: [1.7e6, 1.7e6 + 1) closes, the next needs + 2.1 s
-  ASSERT_EQ(rounds.size(), 2u);
+  EXPECT_EQ(b.add_detection(at_s(11.5), 1, Eigen::Vector3d(1, 0, 0)), "");
+  // 1.7e6 s (19 days) later, to + 1.99 s: [11, 12) closes with its detection, [1.7e6, 1.7e6 + 1)
+  // closes, the next needs + 2.1 s.
+  feed(1.7e6 + 0.25, 175);
+  ASSERT_EQ(rounds.size(), 3u);
   EXPECT_EQ(rounds[0].start_utime, at_s(10));
-  EXPECT_EQ(rounds[1].start_utime, at_s(1.7e6));
-  EXPECT_EQ(rounds[1].end_utime, at_s(1.7e6 + 1));
+  EXPECT_EQ(rounds[1].start_utime, at_s(11));
+  EXPECT_EQ(rounds[1].end_utime, at_s(12));
+  EXPECT_EQ(rounds[1].data.observations.size(), 1u);
+  EXPECT_EQ(rounds[2].start_utime, at_s(1.7e6));
+  EXPECT_EQ(rounds[2].end_utime, at_s(1.7e6 + 1));
   EXPECT_EQ(b.counters().odometry_gaps, 1);
-  EXPECT_EQ(b.counters().rounds, 2);
+  EXPECT_EQ(b.counters().rounds, 3);
 }
 
 // restart(): the odometry's clock went back (a VIO reset); the builder takes the new clock's

@@ -205,18 +205,23 @@ class AttitudeBuffer {
     if (!have_seq_ || seq > last_seq_ || restarted) last_seq_ = seq;  // (not lowered by a reordered one)
     have_seq_ = true;
     if (restarted) return restart({a});
-    if (samples_.empty() || (a.utime > samples_.back().utime && a.utime - samples_.back().utime <= kMaxGapUs)) {
+    if (samples_.empty() || later_within_gap(samples_.back().utime, a.utime)) {
       run_.clear();
-      samples_.push_back(a);
-      while (samples_.size() > kCapacity) samples_.pop_front();
+      append(a);
       return Push::accepted;
     }
-    const bool consistent =
-        !run_.empty() && a.utime > run_.back().utime && a.utime - run_.back().utime <= kMaxGapUs;
+    const bool consistent = !run_.empty() && later_within_gap(run_.back().utime, a.utime);
     if (!consistent) run_.clear();
     run_.push_back(a);
     if (run_.size() >= kRestartRun) return restart(std::deque<Attitude>(run_.begin(), run_.end()));
     return a.utime <= samples_.back().utime ? Push::not_later : Push::too_far_ahead;
+  }
+  // A recorded file's sample (--png-dir's odometry.tum): taken when later than the newest, whatever
+  // the gap (a pause in the recording is not a new clock).
+  bool push_recorded(const Attitude& a) {
+    if (!samples_.empty() && a.utime <= samples_.back().utime) return false;
+    append(a);
+    return true;
   }
   bool empty() const { return samples_.empty(); }
   int64_t newest() const { return samples_.empty() ? INT64_MIN : samples_.back().utime; }
@@ -233,6 +238,14 @@ class AttitudeBuffer {
   }
 
  private:
+  // t later than t0 by at most kMaxGapUs (the difference taken unsigned: no overflow for any times).
+  static bool later_within_gap(int64_t t0, int64_t t) {
+    return t > t0 && static_cast<uint64_t>(t) - static_cast<uint64_t>(t0) <= static_cast<uint64_t>(kMaxGapUs);
+  }
+  void append(const Attitude& a) {
+    samples_.push_back(a);
+    while (samples_.size() > kCapacity) samples_.pop_front();
+  }
   Push restart(std::deque<Attitude> samples) {
     samples_ = std::move(samples);
     run_.clear();
@@ -539,10 +552,8 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
   std::ifstream odo(tum);
   std::string line;
   *odometry_lines = 0;
-  int64_t line_number = 0;
   std::optional<double> previous_yaw;
   while (odo && std::getline(odo, line)) {
-    ++line_number;
     fact::PoseLine pl;
     std::string error;
     if (fact::parse_pose_line(line, &pl, &error) != fact::PoseLineKind::sample) continue;
@@ -552,8 +563,7 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
     // got a yaw near 0, and its rotation homography lost the track).
     if (previous_yaw) a.yaw = *previous_yaw + std::remainder(a.yaw - *previous_yaw, 2 * M_PI);
     previous_yaw = a.yaw;
-    if (attitudes->push(Attitude{static_cast<int64_t>(std::llround(pl.time * 1e6)), a.yaw, a.pitch, a.roll},
-                        line_number) == AttitudeBuffer::Push::accepted)
+    if (attitudes->push_recorded(Attitude{static_cast<int64_t>(std::llround(pl.time * 1e6)), a.yaw, a.pitch, a.roll}))
       ++*odometry_lines;
   }
   return "";

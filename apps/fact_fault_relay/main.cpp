@@ -93,7 +93,7 @@ class Relay {
   Relay(const Flags& f, lcm::LCM* drone, lcm::LCM* swarm)
       : f_(f), lcm_{drone, swarm}, random_(f.seed), log_("fact-fault-relay", f.drone_id),
         status_(drone, f.status_channel, "fact-fault-relay", f.drone_id) {
-    status_.set_period_us(static_cast<int64_t>(f.status_period * 1e6));
+    status_.set_period_us(static_cast<int64_t>(std::llround(f.status_period * 1e6)));
     faulty_[kDrone] = f.faults == "to-drone" || f.faults == "both";  // messages going to the drone
     faulty_[kSwarm] = f.faults == "to-swarm" || f.faults == "both";
   }
@@ -230,7 +230,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"to-drone", "to-swarm", "both"}));
   cli.add_option("--drone-id", f.drone_id, "Drone id, for the status message and logs");
   cli.add_option("--status-channel", f.status_channel, "Status channel (on the drone URL)")->capture_default_str();
-  cli.add_option("--status-period", f.status_period, "s between status messages")->capture_default_str();
+  cli.add_option("--status-period", f.status_period, "s between status messages (0.001 … 3600)")->capture_default_str();
   cli.footer("Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.");
   try {
     cli.parse(argc, argv);
@@ -242,8 +242,8 @@ int main(int argc, char** argv) {
     boot.event("--drone-url and --swarm-url must differ (the relay would feed itself)");
     return 2;
   }
-  if (!(f.status_period > 0)) {
-    boot.event("--status-period must be > 0");
+  if (!(f.status_period >= 0.001 && f.status_period <= 3600)) {  // (as every app: the µs neither 0 nor overflowing)
+    boot.event("error: --status-period: expected a number in [0.001, 3600] s, got " + std::to_string(f.status_period));
     return 2;
   }
   lcm::LCM drone(f.drone_url), swarm(f.swarm_url);

@@ -314,7 +314,7 @@ struct BuilderCounters {
   int64_t moves = 0;                 // times the open round restarted because the drone moved
   int64_t dropped_history = 0;       // samples or detections dropped at the caps
   int64_t dropped_tracks = 0;        // tracks beyond max_tracks
-  int64_t odometry_gaps = 0;         // period mode: gaps over max_odometry_gap that restarted the period
+  int64_t odometry_gaps = 0;         // period mode: gaps over max_odometry_gap (empty periods skipped)
   int64_t restarts = 0;              // restart() calls (the odometry's clock was reset)
   int64_t rounds = 0;
   std::vector<std::pair<std::string, int64_t>> list() const;
@@ -333,8 +333,9 @@ class RoundBuilder {
   std::string add_odometry(int64_t utime, const Eigen::Vector3d& position, double yaw_unwrapped);
   std::string add_detection(int64_t utime, int track_id, const Eigen::Vector3d& vector);
   // The odometry restarted on a new clock (fact-vio-relay's seq went back after a VIO clock
-  // reset): the history, the open round and the rounds waiting for late detections are dropped,
-  // the counters kept. Rounds already taken stay numbered; the next one follows them.
+  // reset): the rounds waiting for late detections are finalized as they are (no late detection
+  // can reach them any more), the history and the open round are dropped, the counters kept.
+  // Rounds already taken stay numbered; the next one follows them.
   void restart();
   // Rounds closed and past their latency, oldest first.
   std::vector<BuiltRound> take_rounds();
