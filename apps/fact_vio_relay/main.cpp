@@ -97,7 +97,9 @@ void add_flags(CLI::App& app, Options& o) {
       "t in seconds, position in metres, the body's attitude as a Hamilton unit quaternion,\n"
       "world-from-body, body axes FLU; yaw = heading of the body x axis (Z-Y-X Euler angles).\n"
       "Velocity: the source's (lcm), else the difference of consecutive published positions.\n"
-      "--restamp adds one offset to every time (the first sample's arrival minus its own time).\n"
+      "--restamp adds one offset to every time (the first sample's arrival minus its own time), taken\n"
+      "again when a sample's restamped time is more than 10 s (the filter's gap limit) from its\n"
+      "arrival: the VIO clock jumped (counted: restamp_rebased).\n"
       "Rejected, counted and logged (at most one line per reason per second): NaN/inf fields\n"
       "(rejected_nan), time not strictly increasing (rejected_out_of_order), position or yaw jumps\n"
       "faster than --max-speed/--max-yaw-rate or more than 10 s after the last published sample\n"
@@ -223,9 +225,23 @@ class Relay {
       case fact::PoseLineKind::malformed: malformed(where, error); return;
       case fact::PoseLineKind::sample: break;
     }
-    if (options_.restamp && !has_offset_ && std::isfinite(line.time) && std::abs(line.time) < 9e12) {
-      offset_us_ = static_cast<double>(now - std::llround(line.time * 1e6));  // whole µs: intervals kept exactly
-      has_offset_ = true;
+    if (options_.restamp && std::isfinite(line.time) && std::abs(line.time) < 9e12) {
+      // The offset puts the first sample's time at its arrival (whole µs: intervals kept exactly).
+      // Restamped times then follow the wall clock; one off it by more than the filter's max_gap
+      // (which would refuse it as a jump) means the VIO's own clock jumped (a reset): the offset is
+      // taken again at this sample, so the stream goes on in wall-clock time instead of restarting
+      // 20 samples later on the stale offset, far from the camera's frame times. (A smaller
+      // threshold would re-base on a relay that stalls and then catches up.)
+      const double offset = static_cast<double>(now - std::llround(line.time * 1e6));
+      if (!has_offset_) {
+        offset_us_ = offset;
+        has_offset_ = true;
+      } else if (std::abs(offset - offset_us_) > options_.filter.max_gap * 1e6) {
+        status_.count("restamp_rebased");
+        log_.event(where + ": the VIO clock jumped by " + std::to_string((offset_us_ - offset) * 1e-6) +
+                   " s against the wall clock: --restamp offset taken again at this sample");
+        offset_us_ = offset;
+      }
     }
     handle(filter_.push(line, offset_us_), now, where);
   }
