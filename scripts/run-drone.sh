@@ -13,6 +13,8 @@
 #            tum:FILE        a TUM trajectory file;  udp:PORT  one pose line per datagram
 #   --fc     udp:LOCAL:HOST:PORT   MAVLink over UDP (PX4 SITL: udp:14540:127.0.0.1:14580)
 #            serial:DEV[:BAUD]     MAVLink over a serial port (default 921600 bit/s)
+#   --vio-restamp            (tum/udp VIO) fact-vio-relay --restamp: put the VIO's times on the wall
+#                            clock, when the VIO stamps with its own (boot) clock and the camera not
 #   --key FILE               the swarm key for fact-gossip (32 raw bytes or 64 hex digits, mode 600);
 #                            --insecure runs without one (bench tests only)
 #   --session NAME           this flight's name for fact-gossip (the same on every drone, new for
@@ -30,8 +32,9 @@
 # Pre-flight: the relay, the detector and the bridge start first; then fact-preflight checks the
 # swarm key, the flight controller's heartbeat (through the bridge), camera frames and VIO odometry.
 # Only when every item passes do gossip, solver and planner (the app that moves the drone) start.
-# Ctrl-C stops every app. Exit codes: 0 stopped by Ctrl-C (or --check-only passed); 1 the
-# checklist failed or an app died (the reason is printed); 2 bad flags.
+# Ctrl-C stops every app. Exit codes: 0 stopped by Ctrl-C once every app runs (or --check-only
+# passed); 1 the checklist failed or an app died (the reason is printed); 2 bad flags; 130 / 143
+# stopped by SIGINT / SIGTERM before the checklist passed (nothing was started after it).
 # Environment: BUILD_DIR (default <repo>/build); FACT_RUN_SUFFIX, appended to every app's path
 # (".qemu" runs the arm64 apps of a cross build under the emulator; test/arm64/cross_tests.cmake).
 set -euo pipefail
@@ -39,17 +42,18 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$here/scripts/lib/args.sh"
 
 die() { echo "run-drone: $*" >&2; echo "run-drone: see --help" >&2; exit 2; }
-id="" camera="" vio="" fc="" key="" session="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
+id="" camera="" vio="" vio_restamp=0 fc="" key="" session="" insecure=0 roster="" lcm_url="" out="" arm=0 sim_clock=0
 check_only=0 build=1 preflight_timeout=10 swarm_url="" noise_quadratic=""
 while [ "$#" -gt 0 ]; do
   case "$1" in
-    -h|--help) sed -n '2,33p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,/^[^#]/{/^#/p}' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --id) [ "$#" -ge 2 ] || die "--id needs a value"; id=$2; shift 2 ;;
     --camera) [ "$#" -ge 2 ] || die "--camera needs a value"; camera=$2; shift 2 ;;
     --vio) [ "$#" -ge 2 ] || die "--vio needs a value"; vio=$2; shift 2 ;;
     --fc) [ "$#" -ge 2 ] || die "--fc needs a value"; fc=$2; shift 2 ;;
     --key) [ "$#" -ge 2 ] || die "--key needs a value"; key=$2; shift 2 ;;
     --insecure) insecure=1; shift ;;
+    --vio-restamp) vio_restamp=1; shift ;;
     --session) [ "$#" -ge 2 ] || die "--session needs a value"; session=$2; shift 2 ;;
     --roster) [ "$#" -ge 2 ] || die "--roster needs a value"; roster=$2; shift 2 ;;
     --lcm-url) [ "$#" -ge 2 ] || die "--lcm-url needs a value"; lcm_url=$2; shift 2 ;;
@@ -64,15 +68,24 @@ while [ "$#" -gt 0 ]; do
     *) die "unknown flag '$1'" ;;
   esac
 done
-[[ "$id" =~ ^[0-9]+$ ]] || die "--id: expected the drone's id (an integer >= 0), got '$id'"
+# (No leading zero: the apps would read 010 as octal 8.)
+[[ "$id" =~ ^(0|[1-9][0-9]{0,8})$ ]] || die "--id: expected the drone's id (an integer 0 … 999999999, no leading zero), got '$id'"
 [ -n "$camera" ] || die "--camera is required (lcm[:URL] or png:DIR)"
 [ -n "$vio" ] || die "--vio is required (lcm, tum:FILE or udp:PORT)"
 [ -n "$fc" ] || die "--fc is required (udp:LOCAL:HOST:PORT or serial:DEV[:BAUD])"
 [ "$insecure" = 1 ] || [ -n "$key" ] || die "--key FILE is required (or --insecure for bench tests)"
 [ "$insecure" = 0 ] || [ -z "$key" ] || die "--key and --insecure exclude each other"
 [ -z "$session" ] || [ -n "$key" ] || die "--session needs --key (a session names a flight of an authenticated swarm)"
-[ -z "$roster" ] || [[ "$roster" =~ ^[0-9]+(,[0-9]+)*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
-[[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--preflight-timeout: expected seconds, got '$preflight_timeout'"
+# As fact-gossip checks them, before anything starts (it would exit only once the planner ran).
+[ -z "$session" ] || [[ "$session" =~ ^[A-Za-z0-9._:-]{1,64}$ ]] ||
+  die "--session: expected 1-64 characters of A-Z a-z 0-9 . _ : -, got '$session'"
+if [ -n "$roster" ]; then
+  [[ "$roster" =~ ^(0|[1-9][0-9]*)(,(0|[1-9][0-9]*))*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
+  [[ ",$roster," == *",$id,"* ]] || die "--roster $roster does not list this drone's --id $id"
+  [[ "$roster" == *,* ]] || die "--roster $roster: a swarm needs at least 2 drones"
+fi
+[[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] && is_positive "$preflight_timeout" ||
+  die "--preflight-timeout: expected seconds > 0, got '$preflight_timeout'"
 [ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
   die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 
@@ -88,13 +101,21 @@ esac
 case "$vio" in
   lcm) vio_src=(--source lcm) ;;
   tum:*) [ -r "${vio#tum:}" ] || die "--vio tum:FILE: cannot read '${vio#tum:}'"; vio_src=(--source tum --file "${vio#tum:}") ;;
-  udp:*) [[ "${vio#udp:}" =~ ^[0-9]+$ ]] || die "--vio udp:PORT: bad port '${vio#udp:}'"; vio_src=(--source udp --port "${vio#udp:}") ;;
+  udp:*) is_port "${vio#udp:}" || die "--vio udp:PORT: expected a port 1-65535, got '${vio#udp:}'"
+         vio_src=(--source udp --port "${vio#udp:}") ;;
   *) die "--vio: expected lcm, tum:FILE or udp:PORT, got '$vio'" ;;
 esac
+[ "$vio_restamp" = 0 ] || [[ "$vio" == tum:* || "$vio" == udp:* ]] || die "--vio-restamp is only for --vio tum:FILE or udp:PORT"
+[ "$vio_restamp" = 0 ] || vio_src+=(--restamp)
 case "$fc" in
-  udp:*:*:*) fc_link=(--udp "${fc#udp:}") ;;
-  serial:*:*) d=${fc#serial:}; fc_link=(--serial "${d%:*}" --baud "${d##*:}") ;;
-  serial:*) fc_link=(--serial "${fc#serial:}") ;;
+  udp:*:*:*) IFS=: read -r _ local_port fc_host fc_port <<<"$fc"
+             is_port "$local_port" && is_port "$fc_port" && [ -n "$fc_host" ] ||
+               die "--fc udp:LOCAL:HOST:PORT: expected ports 1-65535 and a host, got '$fc'"
+             fc_link=(--udp "${fc#udp:}") ;;
+  # A baud is the digits after the last colon; a device path may hold colons (/dev/serial/by-path/…).
+  serial:*) d=${fc#serial:}
+            if [[ "$d" =~ ^(.+):([0-9]+)$ ]]; then fc_link=(--serial "${BASH_REMATCH[1]}" --baud "${BASH_REMATCH[2]}")
+            else fc_link=(--serial "$d"); fi ;;
   *) die "--fc: expected udp:LOCAL:HOST:PORT or serial:DEV[:BAUD], got '$fc'" ;;
 esac
 
@@ -125,7 +146,10 @@ stop_all() {
   pids=()
 }
 trap stop_all EXIT
-trap 'echo "run-drone: stopping"; exit 0' INT TERM
+# Before the checklist has passed a signal is a stop, not a success: 130 / 143.
+flying=0
+trap 'echo "run-drone: stopping"; [ "$flying" = 1 ] && exit 0; exit 130' INT
+trap 'echo "run-drone: stopping"; [ "$flying" = 1 ] && exit 0; exit 143' TERM
 start() {
   local name=$1
   shift
@@ -151,12 +175,22 @@ start fact-fc-bridge "$B/firmware_bridge/fact-fc-bridge$x" "${common[@]}" "${fc_
 sleep 0.5
 check_alive
 rc=0
-"$B/apps/fact-preflight$x" "${common[@]}" "${keyflag[@]}" "${pre_cam[@]}" --timeout "$preflight_timeout" || rc=$?
+# In the background and waited for, so that a signal's trap runs at once (and stop_all stops it).
+"$B/apps/fact-preflight$x" "${common[@]}" "${keyflag[@]}" "${pre_cam[@]}" --timeout "$preflight_timeout" &
+pids+=("$!")
+names+=(fact-preflight)
+wait "$!" || rc=$?
+unset 'pids[-1]' 'names[-1]'
+if [ "$rc" -eq 2 ]; then
+  echo "run-drone: fact-preflight refused its flags (above): a bad flag value" >&2
+  exit 2
+fi
 if [ "$rc" -ne 0 ]; then
   echo "run-drone: the pre-flight checklist failed: not starting gossip, solver or planner" >&2
   exit 1
 fi
-[ "$check_only" = 1 ] && { echo "run-drone: --check-only: the checklist passed"; exit 0; }
+[ "$check_only" = 1 ] && { echo "run-drone: --check-only: the checklist passed"; flying=1; exit 0; }
+flying=1
 gossip_flags=("${keyflag[@]}")
 [ -n "$roster" ] && gossip_flags+=(--roster "$roster")
 [ -n "$session" ] && gossip_flags+=(--session "$session")

@@ -3,7 +3,9 @@
 # small world, its simulated PX4 on MAVLink/UDP 127.0.0.1:14600) stands in for the drone's camera
 # driver, VIO and flight controller. run-drone.sh --check-only starts the relay and the bridge and
 # runs fact-preflight: it passes with everything present, and fails, naming the item, with a
-# missing key, a world-readable key, a flight controller on the wrong port and no camera frames.
+# missing key, a key other users may read or write, a flight controller on the wrong port and no
+# camera frames; bad flag values exit 2 before anything starts, and SIGTERM during the checklist
+# exits 143 with nothing left running.
 #
 #   test/test_run_drone.sh REPO BUILD_DIR [RUN_SUFFIX]
 #
@@ -44,9 +46,11 @@ done
 grep -q "HEARTBEAT" "$WORK/out" || fail "the flight-controller line does not report the heartbeat"
 check 1 --fc udp:14541:127.0.0.1:14600 --key "$WORK/missing.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] swarm key" "$WORK/out" || fail "a missing key file did not fail the key item"
-chmod 644 "$WORK/swarm.key"
-check 1 --fc udp:14542:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
-grep -q "\[FAIL\] swarm key.*readable by every user" "$WORK/out" || fail "a world-readable key did not fail"
+for mode in 644 640 602; do  # readable or writable by another user
+  chmod "$mode" "$WORK/swarm.key"
+  check 1 --fc udp:14542:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
+  grep -q "\[FAIL\] swarm key.*open to other users (mode $mode)" "$WORK/out" || fail "a key of mode $mode did not fail"
+done
 chmod 600 "$WORK/swarm.key"
 check 1 --fc udp:14543:127.0.0.1:14699 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] flight controller" "$WORK/out" || fail "a flight controller on the wrong port did not fail"
@@ -58,4 +62,29 @@ check 2 --fc bogus --key "$WORK/swarm.key"
 grep -q "\-\-fc: expected" "$WORK/out" || fail "a bad --fc was not named"
 check 2 --fc udp:14545:127.0.0.1:14600 --key "$WORK/swarm.key" --noise-quadratic -0.5
 grep -q "\-\-noise-quadratic: expected a number > 0, got '-0.5'" "$WORK/out" || fail "a bad --noise-quadratic was not named"
+# Flag values the apps would refuse only after the planner started (or read otherwise) exit 2 first.
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --id 010
+grep -q "no leading zero" "$WORK/out" || fail "--id 010 (octal 8 to the apps) was not refused"
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --session 'flight 1'
+grep -q "\-\-session: expected 1-64 characters" "$WORK/out" || fail "a bad --session was not refused"
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 1,2
+grep -q "does not list this drone's --id 0" "$WORK/out" || fail "a roster without the drone was not refused"
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 0
+grep -q "at least 2 drones" "$WORK/out" || fail "a one-drone roster was not refused"
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 0
+grep -q "\-\-preflight-timeout: expected seconds > 0" "$WORK/out" || fail "--preflight-timeout 0 was not refused"
+check 2 --fc udp:abc:127.0.0.1:14600 --key "$WORK/swarm.key"
+grep -q "\-\-fc udp:LOCAL:HOST:PORT: expected ports" "$WORK/out" || fail "a bad --fc port was not refused"
+# SIGTERM while the checklist waits: 143 (not 0, which says it passed), and nothing left running.
+rc=0
+BUILD_DIR="$BUILD" FACT_RUN_SUFFIX="$SUFFIX" "$REPO/scripts/run-drone.sh" --id 0 --camera lcm --vio lcm --lcm-url "$URL" \
+  --sim-clock --no-build --check-only --out "$WORK/drone" --fc udp:14547:127.0.0.1:14699 --key "$WORK/swarm.key" \
+  --preflight-timeout "$(scaled 30)" >"$WORK/out" 2>&1 &
+RUN=$!
+sleep "$(scaled 2)"
+kill -TERM $RUN
+wait $RUN || rc=$?
+[ "$rc" -eq 143 ] || fail "SIGTERM during the checklist: exit $rc, expected 143"
+sleep 0.5
+! pgrep -f "fact-preflight.* --timeout $(scaled 30)" >/dev/null || fail "fact-preflight still runs after SIGTERM"
 echo "test_run_drone: the checklist passes on simulated hardware and names each missing item"

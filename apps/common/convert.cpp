@@ -1,5 +1,7 @@
 #include "common/convert.h"
 
+#include "fact/camera.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -239,6 +241,28 @@ std::string result_from_message(const fact::swarm_result_t& m, Estimate* out) {
   e.certificate.bound_error = std::numeric_limits<double>::quiet_NaN();  // not in the message
   e.timing_us = {{"total", m.solve_us}};
   *out = std::move(e);
+  return "";
+}
+
+std::string frame_message_error(const fact::frame_t& m, int drone_id, std::string* counter) {
+  auto fail = [&](const char* c, const std::string& why) {
+    *counter = c;
+    return "frame seq " + std::to_string(m.seq) + ": " + why;
+  };
+  if (m.drone_id != drone_id)
+    return fail("wrong_drone_id", "drone_id = " + std::to_string(m.drone_id) + ", expected " + std::to_string(drone_id));
+  if (m.width <= 0 || m.width > 8192 || m.height <= 0 || m.height > 8192)
+    return fail("bad_frame", "width × height = " + std::to_string(m.width) + " × " + std::to_string(m.height) +
+                                 " (each must be 1 … 8192)");
+  if (m.gray_size != m.depth_size)
+    return fail("size_mismatch", "gray_size = " + std::to_string(m.gray_size) + " but depth_size = " +
+                                     std::to_string(m.depth_size) + " (depth and gray of different sizes)");
+  const int64_t n = int64_t(m.width) * m.height;
+  if (m.gray_size != n)
+    return fail("bad_frame", "gray_size = " + std::to_string(m.gray_size) + ", expected width × height = " +
+                                 std::to_string(n));
+  CameraIntrinsics k{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
+  if (std::string e = intrinsics_error(k); !e.empty()) return fail("bad_intrinsics", "intrinsics: " + e);
   return "";
 }
 

@@ -11,6 +11,7 @@
 // Exit codes: 0 end of --png-dir, or SIGINT/SIGTERM; 1 LCM failed; 2 bad flags, an unreadable
 // --png-dir, or a --model that does not load.
 #include "common/app.h"
+#include "common/convert.h"
 #include "common/flags.h"
 #include "fact/detector.h"
 #include "fact/odometry_filter.h"
@@ -318,29 +319,6 @@ class Pipeline {
   std::optional<Attitude> previous_;
 };
 
-// A frame_t checked and converted: "" or the reason (and the counter name in *counter).
-std::string check_frame(const fact::frame_t& m, int drone_id, std::string* counter) {
-  auto fail = [&](const char* c, const std::string& why) {
-    *counter = c;
-    return "frame seq " + std::to_string(m.seq) + ": " + why;
-  };
-  if (m.drone_id != drone_id)
-    return fail("wrong_drone_id", "drone_id = " + std::to_string(m.drone_id) + ", expected " + std::to_string(drone_id));
-  if (m.width <= 0 || m.width > 8192 || m.height <= 0 || m.height > 8192)
-    return fail("bad_frame", "width × height = " + std::to_string(m.width) + " × " + std::to_string(m.height) +
-                                 " (each must be 1 … 8192)");
-  if (m.gray_size != m.depth_size)
-    return fail("size_mismatch", "gray_size = " + std::to_string(m.gray_size) + " but depth_size = " +
-                                     std::to_string(m.depth_size) + " (depth and gray of different sizes)");
-  const int64_t n = int64_t(m.width) * m.height;
-  if (m.gray_size != n)
-    return fail("bad_frame", "gray_size = " + std::to_string(m.gray_size) + ", expected width × height = " +
-                                 std::to_string(n));
-  fact::CameraIntrinsics k{m.width, m.height, m.fx, m.fy, m.cx, m.cy};
-  if (std::string e = fact::intrinsics_error(k); !e.empty()) return fail("bad_intrinsics", "intrinsics: " + e);
-  return "";
-}
-
 class App {
  public:
   App(lcm::LCM* lcm, const Options& o, std::unique_ptr<fact::YoloDetector> yolo)
@@ -361,7 +339,7 @@ class App {
     auto m = std::make_shared<fact::frame_t>();
     if (!fact::app::decode(rbuf, channel, m.get(), &status_, log_)) return;
     std::string counter;
-    if (std::string e = check_frame(*m, o_.common.drone_id, &counter); !e.empty()) {
+    if (std::string e = fact::app::frame_message_error(*m, o_.common.drone_id, &counter); !e.empty()) {
       reject(counter, e);
       return;
     }

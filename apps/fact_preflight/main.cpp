@@ -1,16 +1,22 @@
 // fact-preflight: the pre-flight checklist of one drone, run by scripts/run-drone.sh before the
 // planner (the app that makes the drone move) is started. Each item is one line, PASS or FAIL
 // with what was seen:
-//   swarm key          --key-file loads as fact-gossip loads it (32 raw bytes or 64 hex digits)
-//                      and is not readable by other users (or --insecure was chosen);
+//   swarm key          --key-file loads as fact-gossip loads it (32 raw bytes or 64 hex digits), is
+//                      a regular file and no other user may read or write it (mode 600 or 400),
+//                      or --insecure was chosen;
 //   flight controller  fact-fc-bridge reports the FC's HEARTBEAT fresh (fact::fc_state_t
-//                      connected on FACT_FC_STATE_<id>);
-//   camera             frames arrive (fact::frame_t on FACT_FRAMES_<id>, this drone's id, sane
-//                      sizes), or --png-dir holds intrinsics.json and gray/depth pairs;
+//                      connected on FACT_FC_STATE_<id>) and the FC standby or active (MAV_STATE
+//                      3 or 4, not booting, calibrating, critical, emergency or terminated);
+//   camera             frames arrive (fact::frame_t on FACT_FRAMES_<id>) that fact-detector takes:
+//                      this drone's id, 1 … 8192 px, sizes that match, usable intrinsics, some
+//                      valid depth; or --png-dir holds intrinsics.json and gray/depth pairs;
 //   VIO                odometry arrives from fact-vio-relay (fact::odometry_t on FACT_ODOMETRY_<id>,
-//                      finite).
+//                      this drone's id, every field finite, seq and utime increasing) and, with
+//                      frames on LCM, on the camera's clock: its newest utime within 1 s of the
+//                      newest frame's (a VIO on the boot clock matches no detection).
 // Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.
 #include "common/app.h"
+#include "common/convert.h"
 #include "common/flags.h"
 #include "fact/fc_state_t.hpp"
 #include "fact/frame_t.hpp"
@@ -21,7 +27,9 @@
 #include <lcm/lcm-cpp.hpp>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -66,10 +74,14 @@ Item check_key(const Options& o) {
     return it;
   }
   struct stat st {};
-  if (stat(o.key_file.c_str(), &st) == 0 && (st.st_mode & S_IROTH)) {
+  if (stat(o.key_file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+    it.seen = o.key_file + " is not a regular file";
+    return it;
+  }
+  if (st.st_mode & 077) {  // group or other may read or write it: the swarm's secret is not
     char mode[8];
     std::snprintf(mode, sizeof mode, "%03o", static_cast<unsigned>(st.st_mode & 0777));
-    it.seen = o.key_file + " is readable by every user (mode " + mode + "): chmod 600 it";
+    it.seen = o.key_file + " is open to other users (mode " + mode + "): chmod 600 it";
     return it;
   }
   it.pass = true;
@@ -106,45 +118,77 @@ class Listener {
   void on_fc(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     fact::fc_state_t m;
     if (!decoded(rb, ch, &m, fc_)) return;
-    if (m.drone_id != o_.common.drone_id) {
-      fc_->seen = "fc_state for drone " + std::to_string(m.drone_id) + " on " + ch;
+    if (m.drone_id != o_.common.drone_id) {  // another bridge on this channel: a failure of its own
+      foreign("fc_state", m.drone_id, ch, fc_);
       return;
     }
-    fc_->pass = m.connected;
-    fc_->seen = m.connected ? "HEARTBEAT " + std::to_string(m.heartbeat_age_ms) + " ms old, " + (m.armed ? "armed" : "disarmed") +
-                                  (m.offboard ? ", OFFBOARD" : "")
-                            : (m.heartbeat_age_ms < 0 ? "fact-fc-bridge runs but has never seen a HEARTBEAT from the flight controller"
-                                                      : "last HEARTBEAT " + std::to_string(m.heartbeat_age_ms) + " ms ago (stale)");
+    if (foreign_fc_) return;
+    const bool ready = m.system_status == 3 || m.system_status == 4;  // MAV_STATE_STANDBY / ACTIVE
+    fc_->pass = m.connected && ready;
+    const std::string state = "MAV_STATE " + std::to_string(m.system_status) + " (" + mav_state(m.system_status) + ")";
+    fc_->seen = !m.connected ? (m.heartbeat_age_ms < 0 ? "fact-fc-bridge runs but has never seen a HEARTBEAT from the flight controller"
+                                                        : "last HEARTBEAT " + std::to_string(m.heartbeat_age_ms) + " ms ago (stale)")
+                : !ready     ? "HEARTBEAT fresh but the flight controller is not ready: " + state
+                             : "HEARTBEAT " + std::to_string(m.heartbeat_age_ms) + " ms old, " + state + ", " +
+                                   (m.armed ? "armed" : "disarmed") + (m.offboard ? ", OFFBOARD" : "");
   }
 
+  // A frame is checked as fact-detector checks it (fact::app::frame_message_error): one it would reject
+  // fails the item for good, naming the field and value.
   void on_frame(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     fact::frame_t m;
     if (!decoded(rb, ch, &m, camera_)) return;
     ++frames_;
-    if (m.drone_id != o_.common.drone_id || m.width <= 0 || m.height <= 0 || m.gray_size != m.width * m.height ||
-        m.depth_size != m.width * m.height || !(m.fx > 0)) {
+    std::string counter;
+    std::string e = fact::app::frame_message_error(m, o_.common.drone_id, &counter);
+    if (e.empty() && std::all_of(m.depth_mm.begin(), m.depth_mm.end(), [](int16_t d) { return d == 0; }))
+      e = "frame seq " + std::to_string(m.seq) + ": depth_mm is 0 at every pixel (no valid depth: is the depth stream on?)";
+    if (!e.empty()) {
       camera_->pass = false;
-      camera_->seen = "a bad frame on " + ch + ": drone_id " + std::to_string(m.drone_id) + ", " + std::to_string(m.width) + "x" +
-                      std::to_string(m.height) + ", gray_size " + std::to_string(m.gray_size) + ", depth_size " +
-                      std::to_string(m.depth_size);
+      camera_->seen = "a frame fact-detector rejects on " + ch + ": " + e;
       bad_frame_ = true;
       return;
     }
     if (bad_frame_) return;
+    newest_frame_utime_ = std::max(newest_frame_utime_, m.utime);
     camera_->pass = frames_ >= 2;
     camera_->seen = std::to_string(frames_) + " frames " + std::to_string(m.width) + "x" + std::to_string(m.height) + " on " + ch;
+    check_clocks();
   }
 
+  // Odometry as fact-detector, fact-gossip and fact-planner take it: one they would refuse fails
+  // the item for good, naming the field and value.
   void on_odometry(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     fact::odometry_t m;
     if (!decoded(rb, ch, &m, vio_)) return;
-    const bool finite = std::isfinite(m.position[0]) && std::isfinite(m.position[1]) && std::isfinite(m.position[2]) &&
-                        std::isfinite(m.yaw);
+    if (m.drone_id != o_.common.drone_id) {
+      foreign("odometry", m.drone_id, ch, vio_);
+      return;
+    }
+    std::string e;
+    const std::pair<const char*, double> fields[] = {
+        {"position[0]", m.position[0]}, {"position[1]", m.position[1]}, {"position[2]", m.position[2]},
+        {"velocity[0]", m.velocity[0]}, {"velocity[1]", m.velocity[1]}, {"velocity[2]", m.velocity[2]},
+        {"yaw", m.yaw},                 {"roll", m.roll},               {"pitch", m.pitch}};
+    for (const auto& [name, v] : fields)
+      if (e.empty() && !std::isfinite(v)) e = std::string(name) + " = " + fmt(v) + " (must be finite)";
+    if (e.empty() && odometry_ > 0 && !(m.seq > last_seq_ && m.utime > last_utime_))
+      e = "seq " + std::to_string(m.seq) + ", utime " + std::to_string(m.utime) + " us after seq " +
+          std::to_string(last_seq_) + ", utime " + std::to_string(last_utime_) + " us: not increasing (a frozen or "
+          "repeating VIO)";
+    if (!e.empty() || bad_odometry_) {
+      if (!e.empty()) vio_->seen = "odometry the apps refuse on " + ch + ": seq " + std::to_string(m.seq) + ": " + e;
+      vio_->pass = false;
+      bad_odometry_ = true;
+      return;
+    }
     ++odometry_;
-    vio_->pass = finite && odometry_ >= 2;
-    vio_->seen = finite ? std::to_string(odometry_) + " samples on " + ch + ", position (" + fmt(m.position[0]) + ", " +
-                              fmt(m.position[1]) + ", " + fmt(m.position[2]) + ") m, yaw " + fmt(m.yaw) + " rad"
-                        : "non-finite odometry on " + ch;
+    last_seq_ = m.seq;
+    last_utime_ = m.utime;
+    vio_->pass = odometry_ >= 2;
+    vio_->seen = std::to_string(odometry_) + " samples on " + ch + ", position (" + fmt(m.position[0]) + ", " +
+                 fmt(m.position[1]) + ", " + fmt(m.position[2]) + ") m, yaw " + fmt(m.yaw) + " rad";
+    check_clocks();
   }
 
  private:
@@ -152,6 +196,31 @@ class Listener {
     char b[32];
     std::snprintf(b, sizeof b, "%.2f", v);
     return b;
+  }
+  static const char* mav_state(int s) {
+    static const char* const names[] = {"uninit", "boot", "calibrating", "standby", "active",
+                                        "critical", "emergency", "poweroff", "flight termination"};
+    return s >= 0 && s <= 8 ? names[s] : "unknown";
+  }
+  // A message of another drone on this drone's channel: another process publishes there, which
+  // fails the item (the apps would drop its messages, or take the wrong ones).
+  void foreign(const char* what, int drone, const std::string& ch, Item* item) {
+    item->pass = false;
+    item->seen = std::string(what) + " of drone " + std::to_string(drone) + " on " + ch + " (this is drone " +
+                 std::to_string(o_.common.drone_id) + "): another process publishes on this drone's channel";
+    if (item == fc_) foreign_fc_ = true;
+    if (item == vio_) bad_odometry_ = true;
+  }
+  // Frames on LCM and odometry must share a clock: the newest odometry within 1 s of the newest
+  // frame (fact-gossip interpolates the odometry at each detection's time).
+  void check_clocks() {
+    if (!o_.png_dir.empty() || newest_frame_utime_ == INT64_MIN || odometry_ == 0 || bad_odometry_) return;
+    const double apart_s = static_cast<double>(last_utime_ - newest_frame_utime_) * 1e-6;
+    if (std::abs(apart_s) <= 1.0) return;
+    vio_->pass = false;
+    vio_->seen = "odometry utime " + std::to_string(last_utime_) + " us is " + fmt(apart_s) + " s from the newest frame's " +
+                 std::to_string(newest_frame_utime_) + " us: the VIO and the camera are on different clocks (for a "
+                 "tum or udp VIO source, fact-vio-relay --restamp)";
   }
   template <class T>
   bool decoded(const lcm::ReceiveBuffer* rb, const std::string& ch, T* m, Item* item) {
@@ -163,7 +232,9 @@ class Listener {
   const Options& o_;
   Item *fc_, *camera_, *vio_;
   int frames_ = 0, odometry_ = 0;
-  bool bad_frame_ = false;
+  bool bad_frame_ = false, bad_odometry_ = false, foreign_fc_ = false;
+  int64_t last_seq_ = 0, last_utime_ = 0;      // the newest odometry taken
+  int64_t newest_frame_utime_ = INT64_MIN;     // µs
 };
 
 }  // namespace

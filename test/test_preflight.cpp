@@ -1,0 +1,131 @@
+// fact-preflight as a process, fed crafted fc_state_t, frame_t and odometry_t over LCM udpm:// by
+// this test: each item passes on what the apps take and fails, naming the field and value, on what
+// they would refuse (review, helper-21: frames with no valid depth or bad intrinsics, odometry of
+// another drone, NaN, frozen, or on another clock than the camera, and a flight controller in
+// emergency all passed). The whole binary re-runs itself in a private network namespace
+// (scripts/netns-run.sh), as every udpm test does.
+#include "fact/fc_state_t.hpp"
+#include "fact/frame_t.hpp"
+#include "fact/odometry_t.hpp"
+#include "app_process.h"
+#include "private_netns.h"
+#include "temp_dir.h"
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+constexpr int kDrone = 3;
+
+// What the healthy drone publishes; each test breaks one thing.
+struct Hardware {
+  int fc_status = 3;                 // MAV_STATE_STANDBY
+  int fc_drone = kDrone;
+  int frame_drone = kDrone;
+  double fy = 213;                   // px
+  bool depth = true;                 // some valid depth
+  int odometry_drone = kDrone;
+  double roll = 0;                   // rad
+  bool frozen = false;               // the same seq and utime again and again
+  int64_t odometry_offset_us = 0;    // odometry clock − camera clock
+};
+
+class Preflight : public fact::test::TempDirTest {
+ protected:
+  Preflight() : TempDirTest("fact-preflight") {}
+
+  // Runs fact-preflight (--insecure, 1.5 s) while publishing `hw` at 20 Hz: its exit code and output.
+  std::pair<int, std::string> run(const Hardware& hw) {
+    lcm::LCM lcm(kUrl);
+    EXPECT_TRUE(lcm.good());
+    fact::test::AppProcess p({FACT_PREFLIGHT_BINARY, "--drone-id", std::to_string(kDrone), "--lcm-url", kUrl, "--insecure",
+                              "--timeout", "1.5"},
+                             dir_ / "out", dir_ / "out");
+    EXPECT_TRUE(p.started());
+    const int64_t t0 = 1700000000000000;
+    for (int k = 0; p.running() && k < 400; ++k) {
+      const int64_t t = t0 + k * 50000;  // µs
+      fact::fc_state_t fc{};
+      fc.utime = t;
+      fc.drone_id = hw.fc_drone;
+      fc.connected = true;
+      fc.system_status = hw.fc_status;
+      fc.heartbeat_age_ms = 40;
+      lcm.publish("FACT_FC_STATE_3", &fc);
+      fact::odometry_t o{};
+      o.utime = (hw.frozen ? t0 : t) + hw.odometry_offset_us;
+      o.seq = hw.frozen ? 0 : k;
+      o.drone_id = hw.odometry_drone;
+      o.position[2] = 1.0;
+      o.roll = hw.roll;
+      lcm.publish("FACT_ODOMETRY_3", &o);
+      fact::frame_t f{};
+      f.utime = t;
+      f.drone_id = hw.frame_drone;
+      f.seq = k;
+      f.width = 64;
+      f.height = 48;
+      f.fx = 213, f.fy = hw.fy, f.cx = 32, f.cy = 24;
+      f.gray_size = f.depth_size = 64 * 48;
+      f.gray.assign(64 * 48, 100);
+      f.depth_mm.assign(64 * 48, static_cast<int16_t>(hw.depth ? 3000 : 0));
+      lcm.publish("FACT_FRAMES_3", &f);
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return {p.wait_for(std::chrono::seconds(5)), p.out()};
+  }
+};
+
+TEST_F(Preflight, HealthyHardwarePassesEveryItem) {
+  const auto [code, out] = run({});
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("[PASS] flight controller HEARTBEAT 40 ms old, MAV_STATE 3 (standby)"), std::string::npos) << out;
+  EXPECT_NE(out.find("[PASS] camera"), std::string::npos) << out;
+  EXPECT_NE(out.find("[PASS] VIO"), std::string::npos) << out;
+}
+
+// Each case: what is broken, and the words the failed item must say.
+TEST_F(Preflight, WhatTheAppsWouldRefuseFailsItsItemNamingIt) {
+  struct Case {
+    const char* what;
+    std::function<void(Hardware&)> breaks;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      {"FC in emergency", [](Hardware& h) { h.fc_status = 6; }, "[FAIL] flight controller HEARTBEAT fresh but the flight "
+                                                                 "controller is not ready: MAV_STATE 6 (emergency)"},
+      {"another drone's FC", [](Hardware& h) { h.fc_drone = 7; }, "[FAIL] flight controller fc_state of drone 7"},
+      {"no valid depth", [](Hardware& h) { h.depth = false; }, "depth_mm is 0 at every pixel"},
+      {"fy NaN", [](Hardware& h) { h.fy = std::nan(""); }, "intrinsics: fy = nan"},
+      {"another drone's frames", [](Hardware& h) { h.frame_drone = 4; }, "drone_id = 4, expected 3"},
+      {"another drone's odometry", [](Hardware& h) { h.odometry_drone = 7; }, "[FAIL] VIO               odometry of drone 7"},
+      {"NaN roll", [](Hardware& h) { h.roll = std::nan(""); }, "roll = nan (must be finite)"},
+      {"frozen VIO", [](Hardware& h) { h.frozen = true; }, "not increasing (a frozen or repeating VIO)"},
+      {"VIO on the boot clock", [](Hardware& h) { h.odometry_offset_us = -1699990000000000; },
+       "the VIO and the camera are on different clocks"},
+  };
+  for (const Case& c : cases) {
+    Hardware hw;
+    c.breaks(hw);
+    const auto [code, out] = run(hw);
+    EXPECT_EQ(code, 1) << c.what << "\n" << out;
+    EXPECT_NE(out.find(c.line), std::string::npos) << c.what << "\n" << out;
+    EXPECT_NE(out.find("must not fly"), std::string::npos) << c.what;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }
