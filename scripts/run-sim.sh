@@ -110,6 +110,14 @@ for pair in "fast-rate:$fast_rate" "max-sim-time:$max_sim" "camera-rate:$camera_
   is_positive "${pair#*:}" ||
     die_usage "--${pair%%:*}: expected a number > 0, got '${pair#*:}'"
 done
+# What the apps would refuse only after everything started (exit 1, "an app exited early"):
+is_uint "$max_rounds" && [ "${#max_rounds}" -le 6 ] && [ "$((10#$max_rounds))" -ge 1 ] ||
+  die_usage "--max-rounds: expected an integer 1..999999, got '$max_rounds'"
+max_rounds=$((10#$max_rounds))  # decimal for the apps too (they would read 010 as octal)
+awk -v v="$spin_rate" 'BEGIN { exit !(v <= 1.5) }' ||
+  die_usage "--spin-rate: at most the yaw-rate limit 1.5 rad/s, got '$spin_rate'"
+awk -v v="$camera_rate" 'BEGIN { exit !(v <= 100) }' ||
+  die_usage "--camera-rate: at most 100 Hz (fact-sim serves one frame per 10 ms batch), got '$camera_rate'"
 [ -r "$world" ] || die_usage "--world: cannot read '$world'"
 world="$(cd "$(dirname "$world")" && pwd)/$(basename "$world")"
 

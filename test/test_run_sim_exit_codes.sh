@@ -51,6 +51,14 @@ rc=0
 run_sim badnoise --noise-quadratic 0 || rc=$?
 [ "$rc" -eq 2 ] || { cat "$OUT/badnoise.out"; fail "--noise-quadratic 0 exited $rc, expected 2"; }
 grep -q "noise-quadratic: expected a number > 0, got '0'" "$OUT/badnoise.out" || fail "the refusal does not name --noise-quadratic"
+# Values the apps would refuse only after the start (exit 1, "exited early") are refused first: 2.
+for bad in "--max-rounds 2.5" "--spin-rate 50" "--camera-rate 500"; do
+  rc=0
+  # shellcheck disable=SC2086
+  run_sim badflag $bad || rc=$?
+  [ "$rc" -eq 2 ] || { cat "$OUT/badflag.out"; fail "$bad exited $rc, expected 2"; }
+  grep -q -- "${bad%% *}" "$OUT/badflag.out" || fail "the refusal of $bad does not name the flag"
+done
 
 # 2. An app killed during the run: 1, naming it. The solver of drone 1 is found by its log file,
 # which only that process holds open.

@@ -400,8 +400,12 @@ TEST(SimAppFlags, PrintIdsAndBadRunFlags) {
     EXPECT_EQ(pclose(p), 0);
     EXPECT_EQ(std::string(buf, n), "0 1 2 3 4\n");  // small.json: ids 0..count-1
   }
+  // Rates above the 100 Hz the 10 ms batches can serve (1e11 spun deaf to SIGTERM), durations and
+  // epochs near int64 µs overflow, a signed seed (read as 2^64 − 1) exit 2 naming flag and value.
   for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
-           {"--render-threads", "0"}, {"--lockstep-timeout", "-1"}}) {
+           {"--render-threads", "0"}, {"--lockstep-timeout", "-1"}, {"--odometry-rate", "1e11"},
+           {"--camera-rate", "101"}, {"--truth-rate", "nan"}, {"--duration", "1e300"},
+           {"--epoch-utime", "9223372036854775000"}, {"--seed", "-1"}, {"--spin-rate", "2"}}) {
     SimProcess sim({flag, value, "--lcm-url", "memq://"});
     EXPECT_EQ(sim.wait(), 2) << flag;
     EXPECT_NE(sim.err().find(flag), std::string::npos) << sim.err();

@@ -38,6 +38,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -91,7 +92,11 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--world", o.world_file, "fact-world-v1 JSON world file (default: the built-in default world)")
       ->type_name("FILE");
   app.add_option("--drones", o.drones, "Number of drones (overrides the world's count; 1-64)")->type_name("N");
-  app.add_option("--seed", o.seed, "Seed of every random choice (starts, heights, drift, noise)")->capture_default_str();
+  app.add_option("--seed", o.seed, "Seed of every random choice (starts, heights, drift, noise)")
+      ->check(CLI::Validator(
+          [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "expected a seed >= 0, got " + v; },
+          "SEED"))  // (CLI11 would wrap -1 to 2^64 - 1)
+      ->capture_default_str();
   app.add_option("--rate", o.rate, "Real-time factor (1 = real time, 0 = as fast as possible)")->capture_default_str();
   app.add_option("--duration", o.duration, "Simulated seconds to run (0 = until SIGINT/SIGTERM)")
       ->type_name("S")->capture_default_str();
@@ -155,10 +160,12 @@ void add_flags(CLI::App& app, Options& o) {
       "Exit codes: 0 at --duration or SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.");
 }
 
-void check_rate(const char* flag, double v, bool zero_ok) {
-  if (std::isfinite(v) && (v > 0 || (zero_ok && v == 0))) return;
-  throw FlagError(std::string(flag) + ": expected a finite number " + (zero_ok ? ">= 0" : "> 0") + ", got " +
-                  std::to_string(v));
+// v in (0, most] (or 0 when zero_ok), naming the flag and the value.
+void check_rate(const char* flag, double v, bool zero_ok, double most) {
+  if (v <= most && (v > 0 || (zero_ok && v == 0))) return;  // (false for NaN)
+  std::ostringstream s;
+  s << flag << ": expected a number " << (zero_ok ? "in [0, " : "in (0, ") << most << "], got " << v;
+  throw FlagError(s.str());
 }
 
 fact::CameraIntrinsics parse_resolution(const std::string& r) {
@@ -168,16 +175,21 @@ fact::CameraIntrinsics parse_resolution(const std::string& r) {
 }
 
 void check(const Options& o) {
-  check_rate("--rate", o.rate, true);
-  check_rate("--duration", o.duration, true);
-  check_rate("--camera-rate", o.camera_rate, false);
-  check_rate("--odometry-rate", o.odometry_rate, false);
-  check_rate("--truth-rate", o.truth_rate, false);
-  check_rate("--spin-rate", o.spin_rate, false);
-  check_rate("--lockstep-timeout", o.lockstep_timeout, false);
+  // Outputs go out at most once per 10 ms batch: a stream above 100 Hz was cut to 100 Hz, and
+  // 1e11 Hz spun in its scheduling loop deaf to SIGTERM. Durations and the epoch stay far from
+  // int64 µs overflow (1e7 s is 116 days).
+  const double per_batch = 1e6 / static_cast<double>(kBatchUs);
+  check_rate("--rate", o.rate, true, 1e4);
+  check_rate("--duration", o.duration, true, 1e7);
+  check_rate("--camera-rate", o.camera_rate, false, per_batch);
+  check_rate("--odometry-rate", o.odometry_rate, false, per_batch);
+  check_rate("--truth-rate", o.truth_rate, false, per_batch);
+  check_rate("--spin-rate", o.spin_rate, false, 1.5);
+  check_rate("--lockstep-timeout", o.lockstep_timeout, false, 3600);
+  if (o.epoch_utime < 0 || o.epoch_utime > 4000000000000000)
+    throw FlagError("--epoch-utime: expected 0 … 4e15 us (before 2096), got " + std::to_string(o.epoch_utime));
   if (o.render_threads < 1 || o.render_threads > 64)
     throw FlagError("--render-threads: expected 1-64, got " + std::to_string(o.render_threads));
-  if (o.spin_rate > 1.5) throw FlagError("--spin-rate: at most the yaw-rate limit 1.5 rad/s, got " + std::to_string(o.spin_rate));
   if (o.drones < 0 || o.drones > 64) throw FlagError("--drones: expected 1 ... 64, got " + std::to_string(o.drones));
   fact::sim::Script s;
   if (!fact::sim::parse_script(o.script, &s)) throw FlagError("--script: expected none, hover or spin, got \"" + o.script + "\"");
