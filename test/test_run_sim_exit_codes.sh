@@ -90,4 +90,12 @@ if awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") found = 1 } END { exit !
   grep -q "not a private network namespace" "$OUT/marker.out" || fail "the refusal does not say why"
   [ ! -e "$OUT/marker/logs" ] || fail "apps were started outside a private namespace"
 fi
+# 4. A run killed by SIGKILL (a ctest timeout) leaves no network namespace on the host: the ones
+# 'ip netns add' makes inside netns-run.sh live in its private mount namespace.
+if command -v ip >/dev/null 2>&1; then
+  leak="fact-leak-test-$$"
+  "$REPO/scripts/netns-run.sh" sh -c "ip netns add $leak && kill -KILL \$\$" 2>/dev/null || true
+  ! ip netns list 2>/dev/null | grep -q "$leak" || { ip netns del "$leak"; fail "a SIGKILLed run left namespace $leak"; }
+  [ ! -e "/run/netns/$leak" ] || { rm -f "/run/netns/$leak"; fail "a SIGKILLed run left /run/netns/$leak"; }
+fi
 echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125, seed 08 read as 8, camera noise model used"
