@@ -155,6 +155,33 @@ TEST(SimVio, ControllerFollowsDriftedVio) {
   EXPECT_LT((d.p - Eigen::Vector3d(-0.3, 0, 1)).norm(), 0.01) << d.p.transpose();
 }
 
+// The drifted VIO is a rigid frame: its effective frame (from the true pose and the VIO sample, as
+// fact-run-report computes it) is the same wherever the drone is and however it is turned (it
+// moved by d_y·|p − o_i| when positions turned by θ_i alone and the heading by θ_i − d_y).
+TEST(SimVio, DriftedVioIsARigidFrame) {
+  SimDrone d = make_drone(DroneStart{0, {1, 2, 0}, 0.7});
+  d.drift_p = {0.2, -0.1, 0.05};
+  d.drift_yaw = 0.03;
+  const auto frame = [&](const Eigen::Vector3d& p, double yaw) {
+    d.p = p;
+    d.yaw = yaw;
+    d.v = {0.5, -0.2, 0};
+    const VioSample v = vio_sample(d);
+    const double f_yaw = d.yaw - v.yaw;
+    const Eigen::Vector3d f_origin = d.p - Eigen::AngleAxisd(f_yaw, Eigen::Vector3d::UnitZ()) * v.position;
+    // The velocity turns with the positions: R(f_yaw)·vio_vel is the world velocity.
+    EXPECT_LT((Eigen::AngleAxisd(f_yaw, Eigen::Vector3d::UnitZ()) * v.velocity - d.v).norm(), 1e-12);
+    return std::make_pair(f_yaw, f_origin);
+  };
+  const auto [yaw0, origin0] = frame({1, 2, 0}, 0.7);
+  EXPECT_NEAR(yaw0, 0.7 - 0.03, 1e-12);
+  for (const auto& [p, yaw] : std::vector<std::pair<Eigen::Vector3d, double>>{{{4, -3, 1.5}, 2.0}, {{-2, 5, 1}, -1.0}}) {
+    const auto [y, o] = frame(p, yaw);
+    EXPECT_NEAR(y, yaw0, 1e-12);
+    EXPECT_LT((o - origin0).norm(), 1e-12) << o.transpose() << " vs " << origin0.transpose();
+  }
+}
+
 TEST(SimScript, SpinTakesOffThenSpinsAtTheRate) {
   const World w = quiet_world();
   std::mt19937_64 rng(1);

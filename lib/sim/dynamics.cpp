@@ -70,11 +70,18 @@ double controller_yaw_rate(const Setpoint& sp, const VioSample& vio, const Contr
   return std::clamp(r, -lim.max_yaw_rate, lim.max_yaw_rate);
 }
 
+// The VIO frame is rigid: yaw φ = θ_i − d_y in the world (its heading reads yaw − φ = yaw − θ_i +
+// d_y), origin o_i − R_z(φ)·d_p, so vio_pos = R_z(−φ)(p − o_i) + d_p and vio_vel = R_z(−φ)·v.
+// (Positions and velocities used to turn by θ_i alone while the heading took d_y too: bearings
+// and positions disagreed by d_y, and the frame's origin moved by d_y·|p − o_i| as a drone flew.)
+double vio_frame_yaw(const SimDrone& d) { return d.frame_yaw - d.drift_yaw; }
+
 VioSample vio_sample(const SimDrone& d) {
   VioSample s;
-  s.position = rot_z(-d.frame_yaw, d.p - d.origin) + d.drift_p;
-  s.velocity = rot_z(-d.frame_yaw, d.v);
-  s.yaw = d.yaw - d.frame_yaw + d.drift_yaw;
+  const double phi = vio_frame_yaw(d);
+  s.position = rot_z(-phi, d.p - d.origin) + d.drift_p;
+  s.velocity = rot_z(-phi, d.v);
+  s.yaw = d.yaw - phi;
   s.roll = d.roll;
   s.pitch = d.pitch;
   return s;
@@ -90,7 +97,7 @@ void step_drone(SimDrone* d, const World& world, const ControllerGains& g, const
 
   const VioSample vio = vio_sample(*d);
   const Eigen::Vector3d a_f = controller_acceleration(d->setpoint, vio, g, lim);
-  d->a = rot_z(d->frame_yaw + d->drift_yaw, a_f);  // physical world acceleration
+  d->a = rot_z(vio_frame_yaw(*d), a_f);  // physical world acceleration: a_f is in the VIO frame
   d->yaw_rate = controller_yaw_rate(d->setpoint, vio, g, lim);
 
   d->v = clamp_norm(d->v + d->a * dt, lim.max_speed);
