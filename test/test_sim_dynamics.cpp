@@ -182,6 +182,27 @@ TEST(SimVio, DriftedVioIsARigidFrame) {
   }
 }
 
+// A setpoint beyond the wall: the drone stops with its body inside the room (its centre stopped
+// at the wall, and the camera 0.10 m ahead left the room).
+TEST(SimDynamics, WallsStopTheBodyNotJustTheCentre) {
+  World w = quiet_world();
+  std::mt19937_64 rng(1);
+  const double r = bounding_radius(DroneBody{});
+  for (const Eigen::Vector3d& target : {Eigen::Vector3d(999, 0, 1), Eigen::Vector3d(0, 0, 99)}) {
+    SimDrone d = make_drone(DroneStart{0, {0, 0, 0}, 0.0});
+    d.setpoint.position = target;
+    d.have_setpoint = true;
+    d.landed = false;
+    for (int k = 0; k < static_cast<int>(15.0 / kDt); ++k) step_drone(&d, w, ControllerGains{}, DynamicsLimits{}, kDt, &rng);
+    if (target.x() > 100) {
+      EXPECT_NEAR(d.p.x(), room_max(w).x() - r, 1e-9);  // the wall
+    } else {
+      EXPECT_NEAR(d.p.z(), room_max(w).z() - r, 1e-9);  // the ceiling
+    }
+  }
+  EXPECT_GT(r, 0.10);  // the camera's offset: it stays inside
+}
+
 TEST(SimScript, SpinTakesOffThenSpinsAtTheRate) {
   const World w = quiet_world();
   std::mt19937_64 rng(1);

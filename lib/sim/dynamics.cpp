@@ -104,8 +104,12 @@ void step_drone(SimDrone* d, const World& world, const ControllerGains& g, const
   d->p += d->v * dt;
   d->yaw += d->yaw_rate * dt;
 
-  // Floor and walls: stop at them (no bounce).
-  const Eigen::Vector3d lo = room_min(world), hi = room_max(world);
+  // Floor, walls and ceiling: stop at them (no bounce). The walls and the ceiling stop the body,
+  // not its centre: the centre keeps the body's bounding radius from them, so the camera (0.10 m
+  // ahead) never leaves the room (at the wall it rendered a frame with no valid pixel). The floor
+  // stops the centre, where the drone sits before takeoff.
+  static const double r = bounding_radius(DroneBody{});
+  const Eigen::Vector3d lo = room_min(world) + Eigen::Vector3d(r, r, 0), hi = room_max(world) - Eigen::Vector3d(r, r, r);
   for (int k = 0; k < 3; ++k) {
     if (d->p[k] < lo[k]) {
       d->p[k] = lo[k];
