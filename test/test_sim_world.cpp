@@ -238,6 +238,21 @@ TEST(SimWorldStarts, BadStartsAreNamed) {
   EXPECT_NE(fact::sim::starts_error(w).find("appears twice"), std::string::npos);
   w.starts = {{0, {0, 0, 0}, 0}, {1, {6, 0, 0}, 0}};
   EXPECT_NE(fact::sim::starts_error(w).find("position[0] = 6"), std::string::npos) << fact::sim::starts_error(w);
+  // The body must fit (review, helper-22: these flew without complaint): two drones on one spot,
+  // one inside a box, hover heights above a low ceiling.
+  w.starts = {{0, {-1, 0, 0}, 0}, {1, {2, 2, 0}, 0}, {2, {-1, 0, 0}, 0}};
+  EXPECT_NE(fact::sim::starts_error(w).find("start 2 (drone 2): 0 m from start 0"), std::string::npos)
+      << fact::sim::starts_error(w);
+  w.starts = {{0, {-1, 0, 0}, 0}, {1, {3, 0, 0.6}, 0}};  // inside the box (z 0.5 … 1.5)
+  w.obstacles = {fact::sim::make_box({3, 0, 1}, {1, 0.5, 1}, 0)};
+  EXPECT_NE(fact::sim::starts_error(w).find("from obstacle 0, closer than the drone's radius"), std::string::npos)
+      << fact::sim::starts_error(w);
+  w.obstacles.clear();
+  EXPECT_EQ(fact::sim::starts_error(w), "");
+  w.starts[1].position.z() = 0;
+  w.room_size.z() = 0.5;
+  EXPECT_NE(fact::sim::starts_error(w).find("drones.height max 2.5 m is above the ceiling 0.5 m"), std::string::npos)
+      << fact::sim::starts_error(w);
 }
 
 // ----------------------------------------------------------------------------------------------

@@ -351,7 +351,24 @@ std::string starts_error(const World& w) {
       if (s.position[k] < lo[k] || s.position[k] > hi[k])
         return where + ": position[" + std::to_string(k) + "] = " + num(s.position[k]) + " is outside the room [" +
                num(lo[k]) + ", " + num(hi[k]) + "]";
+    // The body must fit where it starts: clear of every obstacle and of the drones before it (two
+    // drones on one spot, or one inside a box, flew without complaint).
+    const double r = bounding_radius(DroneBody{});
+    for (size_t j = 0; j < w.obstacles.size(); ++j)
+      if (distance(w.obstacles[j], s.position) < r)
+        return where + ": position (" + num(s.position.x()) + ", " + num(s.position.y()) + ", " + num(s.position.z()) +
+               ") is " + num(distance(w.obstacles[j], s.position)) + " m from obstacle " + std::to_string(j) +
+               ", closer than the drone's radius " + num(r) + " m";
+    for (size_t j = 0; j < i; ++j)
+      if ((w.starts[j].position - s.position).norm() < 2 * r)
+        return where + ": " + num((w.starts[j].position - s.position).norm()) + " m from start " + std::to_string(j) +
+               " (drone " + std::to_string(w.starts[j].id) + "), closer than two drones' radii " + num(2 * r) + " m";
   }
+  // Every drone's hover height must fit under the ceiling, whether the file gave the range or not.
+  const DroneConfig& c = w.drone_config;
+  if (c.height_max > w.room_size.z() - bounding_radius(DroneBody{}))
+    return "drones.height max " + num(c.height_max) + " m is above the ceiling " + num(w.room_size.z()) +
+           " m less the drone's radius (set drones.height or a higher room)";
   return "";
 }
 

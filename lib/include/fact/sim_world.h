@@ -121,7 +121,9 @@ std::vector<int> drone_ids(const DroneConfig& c);
 // 1 m and clearance 0.4 m").
 std::string place_random_starts(World* w, uint64_t seed);
 
-// Whether a start set is usable: ids unique and ≥ 0, spots inside the room, finite yaw. "" if so.
+// Whether a start set is usable: ids unique and ≥ 0, spots inside the room, finite yaw, each
+// spot at least the drone's bounding radius from every obstacle and two radii from the others,
+// and the hover heights under the ceiling less the radius. "" if so, else which and why.
 std::string starts_error(const World& w);
 
 // The built-in default world: room 10 × 10 × 4 m, one box, one cylinder and one polytope,
