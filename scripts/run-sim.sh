@@ -193,7 +193,9 @@ ids=$("$bin_sim" --world "$world" ${drones:+--drones "$drones"} --print-ids) ||
   { echo "run-sim: fact-sim could not read the world $world" >&2; exit 2; }
 n=$(echo "$ids" | wc -w)
 for id in $ids; do  # each drone's camera group is 239.255.77.<id>
-  [ "$id" -le 255 ] || { echo "run-sim: drone id $id in $world: run-sim.sh supports ids 0..255" >&2; exit 2; }
+  # (Ports 7700+id and 7800+id must not meet: at id 100 drone 100's frames would reach drone 0's
+  # bus sockets, which listen on every group of their port in a shared namespace.)
+  [ "$id" -le 99 ] || { echo "run-sim: drone id $id in $world: run-sim.sh supports ids 0..99" >&2; exit 2; }
 done
 
 # fill_url TEMPLATE ID: the template with "{id}" replaced by ID and "{B+id}" by B + ID, as fact-sim
@@ -212,7 +214,7 @@ DRONE_BUS='udpm://239.255.78.{id}:{7800+id}?ttl=1&recv_buf_size=2097152'
 # Frames: a multicast group and port per drone ({id} and {7700+id} are filled in per drone), so a
 # drone's apps never receive another drone's frames, even when the drones share a namespace.
 FRAMES='udpm://239.255.77.{id}:{7700+id}?ttl=1&recv_buf_size=8388608'
-MAV_BASE=14600     # the simulated flight controllers listen on MAV_BASE + id (ids 0..255)
+MAV_BASE=14600     # the simulated flight controllers listen on MAV_BASE + id (ids 0..99)
 BRIDGE_BASE=14300  # each fact-fc-bridge binds BRIDGE_BASE + id: never one of the simulator's ports
 prefix="fact-run-$$"
 sim_addr=127.0.0.1

@@ -109,6 +109,7 @@ TEST(SimWorldParse, EachBadInputNamesPathAndValue) {
       {with("\"height\": [1.2, 2.0]", "\"height\": [2.0, 1.2]"), "drones.height", "max < min"},
       {with("\"height\": [1.2, 2.0]", "\"height\": [1.2, 5.0]"), "drones.height[1]", "ceiling"},
       {with("\"drift_yaw\": 0.001", "\"drift_yaw\": -0.001"), "vio.drift_yaw", "-0.001"},
+      {with("\"drift_yaw\": 0.001", "\"drift_yaw\": 50"), "vio.drift_yaw", "at most 1 rad per √s, got 50"},
       {with("\"drift_yaw\": 0.001", "\"drift_yaw\": 0.001, \"drift_yaw\": 0.002"), "vio", "duplicate key"},
       {with("\"ids\": [4, 7], \"start\": [{\"position\": [-3, -2, 0], \"yaw\": 0.5}, {\"position\": [3, -2, 0]}]",
             "\"start\": \"grid\""),

@@ -192,8 +192,11 @@ sim::World world_from_json(const std::string& text_in) {
     const Json& v = doc.at("vio");
     expect_object(v, "vio");
     allow_only(v, "vio", {"drift_position", "drift_yaw"});
+    // At most 1 m and 1 rad per √s: a VIO drifting more is no VIO (1000 was taken).
     if (v.contains("drift_position")) w.vio.position = non_negative(v.at("drift_position"), "vio.drift_position");
     if (v.contains("drift_yaw")) w.vio.yaw = non_negative(v.at("drift_yaw"), "vio.drift_yaw");
+    if (w.vio.position > 1) fail("vio.drift_position", "expected at most 1 m per √s, got " + fmt(w.vio.position));
+    if (w.vio.yaw > 1) fail("vio.drift_yaw", "expected at most 1 rad per √s, got " + fmt(w.vio.yaw));
   }
   return w;
 }
