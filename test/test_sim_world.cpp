@@ -250,10 +250,27 @@ TEST(SimWorldStarts, BadStartsAreNamed) {
       << fact::sim::starts_error(w);
   w.obstacles.clear();
   EXPECT_EQ(fact::sim::starts_error(w), "");
-  w.starts[1].position.z() = 0;
+  w.starts[1].position = {w.room_size.x() / 2 - 0.1, 0, 0};  // 0.1 m from the wall: it jumped 0.1 m at once
+  EXPECT_NE(fact::sim::starts_error(w).find("is closer than the drone's radius 0.207"), std::string::npos)
+      << fact::sim::starts_error(w);
+  w.starts[1].position = {3, 0, 0};
   w.room_size.z() = 0.5;
   EXPECT_NE(fact::sim::starts_error(w).find("drones.height max 2.5 m is above the ceiling 0.5 m"), std::string::npos)
       << fact::sim::starts_error(w);
+}
+
+// Random starts keep the body's radius from the walls and two radii from each other, whatever
+// smaller clearance and min_separation a world gives (they are then always valid starts).
+TEST(SimWorldPlacement, RandomStartsFitTheBodyWhateverTheClearance) {
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    World w;
+    w.room_size = {3, 3, 3};
+    w.drone_config.count = 6;
+    w.drone_config.clearance = 0.05;
+    w.drone_config.min_separation = 0.1;
+    ASSERT_EQ(fact::sim::place_random_starts(&w, seed), "") << seed;
+    EXPECT_EQ(fact::sim::starts_error(w), "") << "seed " << seed;
+  }
 }
 
 // ----------------------------------------------------------------------------------------------

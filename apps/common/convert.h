@@ -20,13 +20,13 @@ fact::round_packet_t to_message(int drone_id, int round, const DroneRound& r, in
 
 // A round packet's content; checks: drone_id ≥ 0, round ≥ 0, count == observations.size(),
 // every number finite. On error *out is left unchanged.
+std::string from_message(const fact::round_packet_t& m, DroneRound* out);
+
 // A camera frame as fact-detector takes it: "" or the reason, naming the field and value (this
 // drone's id, width and height 1 … 8192, gray_size = depth_size = width × height, usable
 // intrinsics: fact::intrinsics_error), with the detector's counter for it in *counter
 // (wrong_drone_id, bad_frame, size_mismatch, bad_intrinsics). fact-preflight checks the same.
 std::string frame_message_error(const fact::frame_t& m, int drone_id, std::string* counter);
-
-std::string from_message(const fact::round_packet_t& m, DroneRound* out);
 
 // The swarm's complete rounds → fact::Rounds: drones = drone_ids (sorted; unique, ≥ 0),
 // rounds 0 … complete_rounds − 1 (Round::index = round number), each holding every packet of that

@@ -290,8 +290,9 @@ namespace {
 // column (z from the spot to height_max) and min_separation (horizontal) from earlier spots.
 bool spot_ok(const World& w, const Eigen::Vector3d& p, const std::vector<DroneStart>& placed) {
   const DroneConfig& c = w.drone_config;
+  const double r = bounding_radius(DroneBody{});
   for (const auto& s : placed)
-    if ((s.position - p).head<2>().norm() < c.min_separation) return false;
+    if ((s.position - p).head<2>().norm() < std::max(c.min_separation, 2 * r)) return false;
   const double top = std::max(c.height_max, p.z());
   for (double z = p.z(); z <= top + 1e-9; z += 0.25) {
     Eigen::Vector3d q(p.x(), p.y(), z);
@@ -309,11 +310,14 @@ std::string place_random_starts(World* w, uint64_t seed) {
   std::vector<int> ids = drone_ids(c);
   std::mt19937_64 rng(seed);
   const Eigen::Vector3d lo = room_min(*w), hi = room_max(*w);
-  if (hi.x() - lo.x() <= 2 * c.clearance || hi.y() - lo.y() <= 2 * c.clearance)
+  // At least the body's radius from the walls, whatever clearance says (dynamics stops the centre
+  // there: a start closer jumped to it on the first step).
+  const double wall = std::max(c.clearance, bounding_radius(DroneBody{}));
+  if (hi.x() - lo.x() <= 2 * wall || hi.y() - lo.y() <= 2 * wall)
     return "room " + num(w->room_size.x()) + " x " + num(w->room_size.y()) + " m is too small for clearance " +
-           num(c.clearance) + " m";
-  std::uniform_real_distribution<double> ux(lo.x() + c.clearance, hi.x() - c.clearance);
-  std::uniform_real_distribution<double> uy(lo.y() + c.clearance, hi.y() - c.clearance);
+           num(wall) + " m";
+  std::uniform_real_distribution<double> ux(lo.x() + wall, hi.x() - wall);
+  std::uniform_real_distribution<double> uy(lo.y() + wall, hi.y() - wall);
   std::uniform_real_distribution<double> uyaw(-kPi, kPi);
   std::vector<DroneStart> placed;
   const int kTries = 20000;
@@ -351,9 +355,15 @@ std::string starts_error(const World& w) {
       if (s.position[k] < lo[k] || s.position[k] > hi[k])
         return where + ": position[" + std::to_string(k) + "] = " + num(s.position[k]) + " is outside the room [" +
                num(lo[k]) + ", " + num(hi[k]) + "]";
-    // The body must fit where it starts: clear of every obstacle and of the drones before it (two
-    // drones on one spot, or one inside a box, flew without complaint).
+    // The body must fit where it starts: the drone's radius from the walls and the ceiling (where
+    // dynamics stops its centre), clear of every obstacle and of the drones before it (two drones
+    // on one spot, or one inside a box, flew without complaint).
     const double r = bounding_radius(DroneBody{});
+    for (int k = 0; k < 3; ++k)
+      if ((k < 2 && s.position[k] < lo[k] + r) || s.position[k] > hi[k] - r)
+        return where + ": position[" + std::to_string(k) + "] = " + num(s.position[k]) + " is closer than the drone's radius " +
+               num(r) + " m to the " + (k < 2 ? "wall" : "ceiling") + " (keep it within [" + num(k < 2 ? lo[k] + r : lo[k]) +
+               ", " + num(hi[k] - r) + "])";
     for (size_t j = 0; j < w.obstacles.size(); ++j)
       if (distance(w.obstacles[j], s.position) < r)
         return where + ": position (" + num(s.position.x()) + ", " + num(s.position.y()) + ", " + num(s.position.z()) +
