@@ -83,6 +83,11 @@ if [ -n "$roster" ]; then
   [[ "$roster" =~ ^(0|[1-9][0-9]*)(,(0|[1-9][0-9]*))*$ ]] || die "--roster: expected ids like 0,1,2, got '$roster'"
   [[ ",$roster," == *",$id,"* ]] || die "--roster $roster does not list this drone's --id $id"
   [[ "$roster" == *,* ]] || die "--roster $roster: a swarm needs at least 2 drones"
+  dup=$(tr , '\n' <<<"$roster" | sort | uniq -d | head -n 1)
+  [ -z "$dup" ] || die "--roster $roster lists id $dup twice"
+  [ "$(tr , '\n' <<<"$roster" | wc -l)" -le 32 ] || die "--roster $roster: more than 32 ids (fact-gossip's --max-origins)"
+else
+  [ "$id" -le 9999 ] || die "--id $id: above 9999 (fact-gossip's --max-drone-id) needs a --roster that lists it"
 fi
 [[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] && is_positive "$preflight_timeout" ||
   die "--preflight-timeout: expected seconds > 0, got '$preflight_timeout'"

@@ -114,6 +114,9 @@ done
 is_uint "$max_rounds" && [ "${#max_rounds}" -le 6 ] && [ "$((10#$max_rounds))" -ge 1 ] ||
   die_usage "--max-rounds: expected an integer 1..999999, got '$max_rounds'"
 max_rounds=$((10#$max_rounds))  # decimal for the apps too (they would read 010 as octal)
+awk -v v="$fast_rate" 'BEGIN { exit !(v <= 10000) }' || die_usage "--fast-rate: at most 10000 (fact-sim's --rate), got '$fast_rate'"
+awk -v v="$max_sim" 'BEGIN { exit !(v <= 10000000) }' ||
+  die_usage "--max-sim-time: at most 1e7 s (fact-sim's --duration), got '$max_sim'"
 awk -v v="$spin_rate" 'BEGIN { exit !(v <= 1.5) }' ||
   die_usage "--spin-rate: at most the yaw-rate limit 1.5 rad/s, got '$spin_rate'"
 awk -v v="$camera_rate" 'BEGIN { exit !(v <= 100) }' ||

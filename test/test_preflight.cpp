@@ -36,6 +36,8 @@ struct Hardware {
   int frame_drone = kDrone;
   double fy = 213;                   // px
   bool depth = true;                 // some valid depth
+  int depth_from = 0;                // frames before this one have none (a camera warming up)
+  int restart_at = -1;               // the relay restarts its stream (seq 0 again) here
   int odometry_drone = kDrone;
   double roll = 0;                   // rad
   bool frozen = false;               // the same seq and utime again and again
@@ -65,8 +67,9 @@ class Preflight : public fact::test::TempDirTest {
       fc.heartbeat_age_ms = 40;
       lcm.publish("FACT_FC_STATE_3", &fc);
       fact::odometry_t o{};
+      const bool restarted = hw.restart_at >= 0 && k >= hw.restart_at;
       o.utime = (hw.frozen ? t0 : t) + hw.odometry_offset_us;
-      o.seq = hw.frozen ? 0 : k;
+      o.seq = hw.frozen ? 0 : restarted ? k - hw.restart_at : k;
       o.drone_id = hw.odometry_drone;
       o.position[2] = 1.0;
       o.roll = hw.roll;
@@ -80,7 +83,7 @@ class Preflight : public fact::test::TempDirTest {
       f.fx = 213, f.fy = hw.fy, f.cx = 32, f.cy = 24;
       f.gray_size = f.depth_size = 64 * 48;
       f.gray.assign(64 * 48, 100);
-      f.depth_mm.assign(64 * 48, static_cast<int16_t>(hw.depth ? 3000 : 0));
+      f.depth_mm.assign(64 * 48, static_cast<int16_t>(hw.depth && k >= hw.depth_from ? 3000 : 0));
       lcm.publish("FACT_FRAMES_3", &f);
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
@@ -94,6 +97,16 @@ TEST_F(Preflight, HealthyHardwarePassesEveryItem) {
   EXPECT_NE(out.find("[PASS] flight controller HEARTBEAT 40 ms old, MAV_STATE 3 (standby)"), std::string::npos) << out;
   EXPECT_NE(out.find("[PASS] camera"), std::string::npos) << out;
   EXPECT_NE(out.find("[PASS] VIO"), std::string::npos) << out;
+}
+
+// What the apps take passes too: a camera's first frames without depth, and the relay restarting
+// its stream (seq 0 again) — review, helper-23.
+TEST_F(Preflight, WarmUpFramesAndAnOdometryRestartPass) {
+  Hardware hw;
+  hw.depth_from = 3;
+  hw.restart_at = 1;
+  const auto [code, out] = run(hw);
+  EXPECT_EQ(code, 0) << out;
 }
 
 // Each case: what is broken, and the words the failed item must say.

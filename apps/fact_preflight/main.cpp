@@ -8,10 +8,12 @@
 //                      connected on FACT_FC_STATE_<id>) and the FC standby or active (MAV_STATE
 //                      3 or 4, not booting, calibrating, critical, emergency or terminated);
 //   camera             frames arrive (fact::frame_t on FACT_FRAMES_<id>) that fact-detector takes:
-//                      this drone's id, 1 … 8192 px, sizes that match, usable intrinsics, some
-//                      valid depth; or --png-dir holds intrinsics.json and gray/depth pairs;
+//                      this drone's id, 1 … 8192 px, sizes that match, usable intrinsics, and two
+//                      with valid depth (frames without are skipped); or --png-dir holds
+//                      intrinsics.json and gray/depth pairs;
 //   VIO                odometry arrives from fact-vio-relay (fact::odometry_t on FACT_ODOMETRY_<id>,
-//                      this drone's id, every field finite, seq and utime increasing) and, with
+//                      this drone's id, every field finite, seq and utime increasing, a relay
+//                      restart taken as fact::app::odometry_restarted takes it) and, with
 //                      frames on LCM, on the camera's clock: its newest utime within 1 s of the
 //                      newest frame's (a VIO on the boot clock matches no detection).
 // Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.
@@ -138,21 +140,27 @@ class Listener {
   void on_frame(const lcm::ReceiveBuffer* rb, const std::string& ch) {
     fact::frame_t m;
     if (!decoded(rb, ch, &m, camera_)) return;
-    ++frames_;
     std::string counter;
-    std::string e = fact::app::frame_message_error(m, o_.common.drone_id, &counter);
-    if (e.empty() && std::all_of(m.depth_mm.begin(), m.depth_mm.end(), [](int16_t d) { return d == 0; }))
-      e = "frame seq " + std::to_string(m.seq) + ": depth_mm is 0 at every pixel (no valid depth: is the depth stream on?)";
-    if (!e.empty()) {
-      camera_->pass = false;
+    if (const std::string e = fact::app::frame_message_error(m, o_.common.drone_id, &counter); !e.empty()) {
+      camera_->pass = false;  // a stream fact-detector rejects frame by frame: fails for good
       camera_->seen = "a frame fact-detector rejects on " + ch + ": " + e;
       bad_frame_ = true;
       return;
     }
     if (bad_frame_) return;
+    // A frame without valid depth (a camera warming up, a hand over the lens) is skipped, as the
+    // detector skips it; the item passes on 2 frames with depth.
+    if (std::all_of(m.depth_mm.begin(), m.depth_mm.end(), [](int16_t d) { return d == 0; })) {
+      if (!camera_->pass)
+        camera_->seen = "frame seq " + std::to_string(m.seq) + " on " + ch +
+                        ": depth_mm is 0 at every pixel (no valid depth: is the depth stream on?)";
+      return;
+    }
+    ++depth_frames_;
     newest_frame_utime_ = std::max(newest_frame_utime_, m.utime);
-    camera_->pass = frames_ >= 2;
-    camera_->seen = std::to_string(frames_) + " frames " + std::to_string(m.width) + "x" + std::to_string(m.height) + " on " + ch;
+    camera_->pass = depth_frames_ >= 2;
+    camera_->seen = std::to_string(depth_frames_) + " frames " + std::to_string(m.width) + "x" + std::to_string(m.height) +
+                    " with depth on " + ch;
     check_clocks();
   }
 
@@ -172,6 +180,9 @@ class Listener {
         {"yaw", m.yaw},                 {"roll", m.roll},               {"pitch", m.pitch}};
     for (const auto& [name, v] : fields)
       if (e.empty() && !std::isfinite(v)) e = std::string(name) + " = " + fmt(v) + " (must be finite)";
+    // A stream restart (fact::app::odometry_restarted: seq back to 0 or far back) is taken as the
+    // apps take it: counting starts again.
+    if (e.empty() && odometry_ > 0 && fact::app::odometry_restarted(last_seq_, last_utime_, m.seq, m.utime)) odometry_ = 0;
     if (e.empty() && odometry_ > 0 && !(m.seq > last_seq_ && m.utime > last_utime_))
       e = "seq " + std::to_string(m.seq) + ", utime " + std::to_string(m.utime) + " us after seq " +
           std::to_string(last_seq_) + ", utime " + std::to_string(last_utime_) + " us: not increasing (a frozen or "
@@ -231,7 +242,7 @@ class Listener {
   }
   const Options& o_;
   Item *fc_, *camera_, *vio_;
-  int frames_ = 0, odometry_ = 0;
+  int depth_frames_ = 0, odometry_ = 0;
   bool bad_frame_ = false, bad_odometry_ = false, foreign_fc_ = false;
   int64_t last_seq_ = 0, last_utime_ = 0;      // the newest odometry taken
   int64_t newest_frame_utime_ = INT64_MIN;     // µs

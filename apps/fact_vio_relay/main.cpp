@@ -99,7 +99,8 @@ void add_flags(CLI::App& app, Options& o) {
       "Velocity: the source's (lcm), else the difference of consecutive published positions.\n"
       "--restamp adds one offset to every time (the first sample's arrival minus its own time), taken\n"
       "again when a sample's restamped time is more than 10 s (the filter's gap limit) from its\n"
-      "arrival: the VIO clock jumped (counted: restamp_rebased).\n"
+      "arrival, or its own time goes back more than 1 s: the VIO clock jumped (counted:\n"
+      "restamp_rebased).\n"
       "Rejected, counted and logged (at most one line per reason per second): NaN/inf fields\n"
       "(rejected_nan), time not strictly increasing (rejected_out_of_order), position or yaw jumps\n"
       "faster than --max-speed/--max-yaw-rate or more than 10 s after the last published sample\n"
@@ -232,11 +233,17 @@ class Relay {
       // taken again at this sample, so the stream goes on in wall-clock time instead of restarting
       // 20 samples later on the stale offset, far from the camera's frame times. (A smaller
       // threshold would re-base on a relay that stalls and then catches up.)
-      const double offset = static_cast<double>(now - std::llround(line.time * 1e6));
+      // Also when the VIO's own time goes back by more than a reordered datagram can (1 s): a reset
+      // smaller than max_gap would otherwise restart the stream on the old offset, seconds behind.
+      // (A relay that stalls and catches up sees its lines' times keep increasing.)
+      const int64_t line_us = std::llround(line.time * 1e6);
+      const double offset = static_cast<double>(now - line_us);
+      const bool went_back = has_offset_ && line_us < last_line_us_ - 1000000;
+      if (!has_offset_ || line_us > last_line_us_ || went_back) last_line_us_ = line_us;
       if (!has_offset_) {
         offset_us_ = offset;
         has_offset_ = true;
-      } else if (std::abs(offset - offset_us_) > options_.filter.max_gap * 1e6) {
+      } else if (went_back || std::abs(offset - offset_us_) > options_.filter.max_gap * 1e6) {
         status_.count("restamp_rebased");
         log_.event(where + ": the VIO clock jumped by " + std::to_string((offset_us_ - offset) * 1e-6) +
                    " s against the wall clock: --restamp offset taken again at this sample");
@@ -324,6 +331,7 @@ class Relay {
   fact::OdometryFilter filter_;
   fact::LogLimiter limiter_{1000000};
   bool has_offset_ = false;  // --restamp: offset found (at the first sample with a usable time)
+  int64_t last_line_us_ = 0; // --restamp: the newest line time seen (µs, the VIO's own clock)
   double offset_us_ = 0;     // µs added to every sample's time (0 without --restamp)
 };
 
