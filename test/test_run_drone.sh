@@ -71,6 +71,8 @@ check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 1,2
 grep -q "does not list this drone's --id 0" "$WORK/out" || fail "a roster without the drone was not refused"
 check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 0
 grep -q "at least 2 drones" "$WORK/out" || fail "a one-drone roster was not refused"
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 0,1,1
+grep -q "lists id 1 twice" "$WORK/out" || fail "a roster listing an id twice was not refused"
 check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 0
 grep -q "\-\-preflight-timeout: expected seconds > 0" "$WORK/out" || fail "--preflight-timeout 0 was not refused"
 check 2 --fc udp:abc:127.0.0.1:14600 --key "$WORK/swarm.key"
