@@ -18,19 +18,29 @@ if [ "$(id -u)" -ne 0 ]; then
   echo "netns-run: needs root to create a network namespace (run with sudo)" >&2
   exit 125
 fi
-unshare --net --mount --propagation private -- true 2>/dev/null || {
-  echo "netns-run: 'unshare --net --mount' is not permitted here (a container without CAP_SYS_ADMIN?)" >&2
+unshare --net -- true 2>/dev/null || {
+  echo "netns-run: 'unshare --net' is not permitted here (a container without CAP_SYS_ADMIN?)" >&2
   exit 125
 }
 # Inside: set up lo and the route; any failure there is reported as 125, then exec the command
-# (so its exit code and signals are its own). The command also gets a private mount namespace
-# with its own /run/netns: the namespaces 'ip netns add' makes inside (run-sim.sh's per-drone
-# ones) then vanish with it, even when it is killed by SIGKILL before its cleanup runs (a ctest
-# timeout left them mounted on the host).
-exec unshare --net --mount --propagation private -- sh -c '
+# (so its exit code and signals are its own). Where mounts are allowed, the command also gets a
+# private mount namespace with its own /run/netns: the namespaces 'ip netns add' makes inside
+# (run-sim.sh's per-drone ones) then vanish with it, even when it is killed by SIGKILL before its
+# cleanup runs (a ctest timeout left them mounted on the host). Where they are not (a container
+# that allows network namespaces only), everything runs as before, without that guard.
+mounts=(--mount --propagation private)
+private_run_netns=1
+if ! unshare --net --mount --propagation private -- sh -c 'mount -t tmpfs -o size=1m fact-netns /tmp' 2>/dev/null; then
+  mounts=()
+  private_run_netns=0
+fi
+exec unshare --net "${mounts[@]}" -- env FACT_NETNS_PRIVATE_RUN="$private_run_netns" sh -c '
   ip link set lo up || { echo "netns-run: cannot bring lo up in the new namespace" >&2; exit 125; }
   ip route add 224.0.0.0/4 dev lo || { echo "netns-run: cannot add the multicast route on lo" >&2; exit 125; }
-  mkdir -p /run/netns && mount -t tmpfs -o size=1m fact-netns /run/netns ||
-    { echo "netns-run: cannot mount a private /run/netns" >&2; exit 125; }
+  if [ "$FACT_NETNS_PRIVATE_RUN" = 1 ]; then
+    mkdir -p /run/netns && mount -t tmpfs -o size=1m fact-netns /run/netns ||
+      { echo "netns-run: cannot mount a private /run/netns" >&2; exit 125; }
+  fi
+  unset FACT_NETNS_PRIVATE_RUN
   exec "$@"
 ' netns-run "$@"
