@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,40 @@ TEST_F(LogMerge, UnreadableInputIsNamedAndNothingIsWritten) {
   EXPECT_EQ(merge("--output " + (dir_ / "run.lcm").string()).code, 2);  // no input
   const Ran bad_out = merge("--output " + (dir_ / "no" / "such" / "dir.lcm").string() + " " + (dir_ / "a.lcm").string());
   EXPECT_EQ(bad_out.code, 1) << bad_out.out;
+}
+
+// Damage inside a log (review, helper-24): a data length of 2^31 − 1 crashed LCM's reader
+// (SIGSEGV), a wrong sync word or channel length ended the log silently and lost the rest. Each is
+// now exit 2 naming the event and byte offset, with nothing written; a torn tail is a warning.
+TEST_F(LogMerge, DamagedInputIsNamedAndNothingIsWritten) {
+  const auto damaged = [&](std::streamoff at, const std::string& bytes) {
+    write_log(dir_ / "a.lcm", {{10, "A", "xx"}, {20, "A", "yy"}, {30, "A", "zz"}});
+    std::fstream f(dir_ / "a.lcm", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(at);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  };
+  const std::streamoff second = 28 + 1 + 2;  // header, channel "A", data "xx"
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {std::string("\x7f\xff\xff\xff", 4), "data length 2147483647 is beyond"},     // data length of event 1
+      {std::string("\x00\x00\x13\x88", 4), "channel length 5000 (must be 1"},       // channel length of event 1
+      {std::string("\xde\xad\xbe\xef", 4), "sync word 0xDEADBEEF"}};                 // sync word of event 1
+  for (size_t k = 0; k < cases.size(); ++k) {
+    damaged(second + (k == 0 ? 24 : k == 1 ? 20 : 0), cases[k].first);
+    const Ran r = merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "a.lcm").string());
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(cases[k].second), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("event 1 at byte 31"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(dir_ / "run.lcm"));
+    EXPECT_FALSE(fs::exists(dir_ / "run.lcm.partial"));
+  }
+  // The output named as an input: refused before anything is truncated.
+  write_log(dir_ / "a.lcm", {{10, "A", "xx"}});
+  const Ran same = merge("--output " + (dir_ / "a.lcm").string() + " " + (dir_ / "a.lcm").string());
+  EXPECT_EQ(same.code, 2) << same.out;
+  EXPECT_EQ(read_log(dir_ / "a.lcm").size(), 1u);
+  // A file that is no LCM log at all.
+  std::ofstream(dir_ / "text.lcm") << "not a log\n";
+  EXPECT_EQ(merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "text.lcm").string()).code, 2);
 }
 
 }  // namespace

@@ -77,7 +77,7 @@ struct Channels {
 
 bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTrace>* out) {
   fact::app::LogDecoder dec(kApp);
-  const std::string why = fact::app::for_each_log_event(path, [&](const lcm::LogEvent& e) {
+  const std::string why = fact::app::for_each_log_event(path, kApp, [&](const lcm::LogEvent& e) {
     if (e.channel.rfind(ch.result_prefix, 0) == 0) {
       fact::swarm_result_t m;
       if (!dec.decode(e, &m)) return;

@@ -8,13 +8,20 @@
 // Events are copied unchanged (channel, timestamp, bytes); an event's number is its place in the
 // output. Each input is read once, front to back (a K-way merge: memory is one event per input),
 // and events with equal timestamps keep the order of the inputs. An input that ends in a cut-off
-// event (a logger stopped mid-write) contributes every whole event before it.
-// Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags, or an input that cannot be
-// read (nothing is written then).
+// event (a logger stopped mid-write) contributes every whole event before it (with a warning).
+// Inputs are read with fact::app::LogReader: a damaged input (a wrong sync word, an impossible
+// length) is an error, never a silent early end. The output is written to OUTPUT.partial and
+// renamed when complete, and may not be one of the inputs.
+// Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags, an input that cannot be
+// read, is damaged or is not an LCM log, or the output named as an input (nothing is written then).
+#include "common/log_reader.h"
+
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
+#include <sys/stat.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <queue>
@@ -25,28 +32,32 @@ namespace {
 
 constexpr const char* kApp = "fact-log-merge";
 
-// One input log and a copy of its next event (readNextEvent's buffer is reused on the next read).
+// One input log and a copy of its next event (the reader's buffer is reused on the next read).
 struct Input {
   std::string path;
-  std::unique_ptr<lcm::LogFile> log;
+  std::unique_ptr<fact::app::LogReader> log;
   std::string channel;
   std::string data;
   int64_t timestamp = 0;
-  int64_t events = 0;  // read so far
   bool ended = false;
 
   void advance() {
-    const lcm::LogEvent* e = log->readNextEvent();
-    if (!e) {
+    lcm::LogEvent e;
+    if (!log->next(&e)) {
       ended = true;
       return;
     }
-    channel = e->channel;
-    data.assign(static_cast<const char*>(e->data), static_cast<size_t>(e->datalen));
-    timestamp = e->timestamp;
-    ++events;
+    channel = e.channel;
+    data.assign(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
+    timestamp = e.timestamp;
   }
 };
+
+// Whether two paths name one file (the output named as an input would be truncated before it is read).
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
 
 }  // namespace
 
@@ -64,19 +75,29 @@ int main(int argc, char** argv) {
   }
   std::vector<Input> in(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
+    if (same_file(inputs[i], output)) {
+      std::cerr << kApp << ": error: --output " << output << " is input " << i + 1 << " (" << inputs[i]
+                << "): it would be overwritten before it is read\n";
+      return 2;
+    }
     in[i].path = inputs[i];
-    in[i].log = std::make_unique<lcm::LogFile>(inputs[i], "r");
-    if (!in[i].log->good()) {
-      std::cerr << kApp << ": error: cannot read the LCM log " << inputs[i] << " (input " << i + 1 << ")\n";
+    in[i].log = std::make_unique<fact::app::LogReader>();
+    if (const std::string e = in[i].log->open(inputs[i]); !e.empty()) {
+      std::cerr << kApp << ": error: " << e << " (input " << i + 1 << ")\n";
       return 2;
     }
     in[i].advance();
   }
-  lcm::LogFile out(output, "w");
-  if (!out.good()) {
-    std::cerr << kApp << ": error: cannot write " << output << "\n";
-    return 1;
-  }
+  // Written to OUTPUT.partial and renamed at the end: a damaged input or a failed write leaves
+  // nothing at OUTPUT.
+  const std::string partial = output + ".partial";
+  const auto fail = [&](int code, const std::string& why) {
+    std::cerr << kApp << ": error: " << why << "\n";
+    std::remove(partial.c_str());
+    return code;
+  };
+  auto out = std::make_unique<lcm::LogFile>(partial, "w");
+  if (!out->good()) return fail(1, "cannot write " + partial);
   // Min-heap on (timestamp, input index): the earliest event next, ties in input order.
   const auto later = [&](size_t a, size_t b) {
     return in[a].timestamp != in[b].timestamp ? in[a].timestamp > in[b].timestamp : a > b;
@@ -94,19 +115,27 @@ int main(int argc, char** argv) {
     e.channel = in[i].channel;
     e.datalen = static_cast<int32_t>(in[i].data.size());
     e.data = in[i].data.data();
-    if (out.writeEvent(&e) != 0) {
-      std::cerr << kApp << ": error: writing event " << written << " to " << output << " failed\n";
-      return 1;
-    }
+    if (out->writeEvent(&e) != 0) return fail(1, "writing event " + std::to_string(written) + " to " + partial + " failed");
     ++written;
     in[i].advance();
     if (!in[i].ended) next.push(i);
   }
   std::string counts;
   for (const Input& i : in) {
-    counts += (counts.empty() ? "" : ", ") + i.path + " " + std::to_string(i.events);
-    if (i.events == 0) std::cerr << kApp << ": warning: " << i.path << " holds no events (empty or not an LCM log)\n";
+    if (!i.log->error().empty()) return fail(2, "the LCM log is damaged: " + i.log->error() + " (nothing written)");
+    if (i.log->torn()) std::cerr << kApp << ": warning: " << i.log->note() << "\n";
+    counts += (counts.empty() ? "" : ", ") + i.path + " " + std::to_string(i.log->events());
+    if (i.log->events() == 0 && std::filesystem::file_size(i.path) > 0)
+      return fail(2, i.path + " is not an LCM log (no event in its " + std::to_string(std::filesystem::file_size(i.path)) +
+                         " bytes; nothing written)");
+    if (i.log->events() == 0) std::cerr << kApp << ": warning: " << i.path << " is empty\n";
   }
+  // The last buffered bytes are written at close: check them (a full disk lost the end silently).
+  std::FILE* f = out->getFilePtr();
+  const bool flushed = std::fflush(f) == 0 && std::ferror(f) == 0;
+  out.reset();
+  if (!flushed) return fail(1, "writing " + partial + " failed at the end (disk full?)");
+  if (std::rename(partial.c_str(), output.c_str()) != 0) return fail(1, "cannot rename " + partial + " to " + output);
   std::cout << kApp << ": wrote " << written << " events to " << output << " (" << counts << ")\n";
   return 0;
 }

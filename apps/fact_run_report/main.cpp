@@ -30,6 +30,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -84,7 +85,7 @@ bool finite_truth(const fact::truth_t& t) {
 bool read_log(const Options& o, RunLog* run, std::string* why) {
   fact::app::LogDecoder dec(kApp);
   int64_t clock = -1;
-  *why = fact::app::for_each_log_event(o.log, [&](const lcm::LogEvent& e) {
+  *why = fact::app::for_each_log_event(o.log, kApp, [&](const lcm::LogEvent& e) {
     const std::string& ch = e.channel;
     if (ch == o.clock_channel) {
       fact::sim_clock_t m;
@@ -101,7 +102,12 @@ bool read_log(const Options& o, RunLog* run, std::string* why) {
       }
     } else if (starts_with(ch, o.vio_channel + "_")) {
       fact::odometry_t m;
-      if (dec.decode(e, &m)) run->vio[m.drone_id].push_back(m);
+      if (dec.decode(e, &m)) {
+        if (std::isfinite(m.yaw) && std::isfinite(m.position[0]) && std::isfinite(m.position[1]) &&
+            std::isfinite(m.position[2]))
+          run->vio[m.drone_id].push_back(m);
+        else dec.reject(ch + " (NaN)", "VIO odometry with a NaN position or yaw ignored");
+      }
     } else if (starts_with(ch, o.result_channel + "_")) {
       fact::swarm_result_t m;
       if (dec.decode(e, &m)) run->results[m.drone_id].push_back({m, clock >= 0 ? clock : m.utime});
@@ -410,9 +416,15 @@ int run_report(const Options& o) {
   std::string disagreement;
   for (const auto& [id, r] : chosen) {
     if (r->msg.status != "certified" || result->msg.status != "certified") continue;
+    if (r->msg.drones.size() != result->msg.drones.size() || r->msg.reference != result->msg.reference)
+      disagreement = "drone " + std::to_string(id) + "'s certified result has " + std::to_string(r->msg.drones.size()) +
+                     " drones and reference " + std::to_string(r->msg.reference) + ", drone " +
+                     std::to_string(result->msg.drone_id) + "'s " + std::to_string(result->msg.drones.size()) +
+                     " and reference " + std::to_string(result->msg.reference);
     for (size_t k = 0; k < r->msg.drones.size() && k < result->msg.drones.size(); ++k) {
       const auto &a = r->msg.drones[k], &b = result->msg.drones[k];
-      if (a.id != b.id || std::abs(fact::report::wrap(a.yaw - b.yaw)) > 1e-6 || (vec(a.position) - vec(b.position)).norm() > 1e-6)
+      if (a.id != b.id || a.resolved != b.resolved || !(std::abs(fact::report::wrap(a.yaw - b.yaw)) <= 1e-6) ||
+          !((vec(a.position) - vec(b.position)).norm() <= 1e-6))
         disagreement = "drone " + std::to_string(id) + "'s certified result differs from drone " +
                        std::to_string(result->msg.drone_id) + "'s for drone " + std::to_string(a.id);
     }
@@ -452,8 +464,19 @@ int run_report(const Options& o) {
   const double t0 = run_start_us(run);
   const double time_to_result = (static_cast<double>(result->at) - t0) * 1e-6;
   const double sim_duration = sim_duration_s(run);
-  const bool within = sum.yaw_max <= o.yaw_bound && sum.position_max <= o.position_bound &&
-                      errors.size() == res.drones.size();
+  // Every drone of the truth in the result, resolved and judged, each error finite and within the
+  // bounds (a NaN error used to count as 0 through std::max, and a result holding only the
+  // reference drone passed).
+  std::set<int> truth_ids, result_ids;
+  if (!run.truth.empty()) truth_ids.insert(run.truth.back().drone_ids.begin(), run.truth.back().drone_ids.end());
+  for (const auto& d : res.drones) result_ids.insert(d.id);
+  std::string missing;
+  for (int id : truth_ids)
+    if (!result_ids.count(id)) missing += (missing.empty() ? "" : ", ") + std::to_string(id);
+  bool every_within = errors.size() == res.drones.size() && missing.empty();
+  for (const auto& e : errors)
+    every_within = every_within && e.yaw_error <= o.yaw_bound && e.position_error <= o.position_bound;  // (false for NaN)
+  const bool within = every_within;
   const bool certified = all_certified && res.status == "certified";
   int code = 0;
   std::string verdict;
@@ -465,8 +488,16 @@ int run_report(const Options& o) {
     verdict = "CERTIFIED BUT THE DRONES DISAGREE: " + disagreement;
   } else if (!within) {
     code = 4;
-    verdict = "CERTIFIED BUT WRONG: " + fmt("max yaw error %.4f rad (bound %.3f), max position error %.3f m", sum.yaw_max, o.yaw_bound, sum.position_max) +
-              fmt(" (bound %.2f)", o.position_bound);
+    verdict = !missing.empty()
+                  ? "CERTIFIED BUT INCOMPLETE: the result leaves out drone(s) " + missing + " of the truth"
+              : errors.size() != res.drones.size()
+                  ? "CERTIFIED BUT WRONG: " + std::to_string(res.drones.size() - errors.size()) +
+                        " drone(s) unresolved or without truth to judge them"
+                  : "CERTIFIED BUT WRONG: " +
+                        fmt("max yaw error %.4f rad (bound %.3f), max position error %.3f m", sum.yaw_max, o.yaw_bound,
+                            sum.position_max) +
+                        fmt(" (bound %.2f)", o.position_bound) +
+                        (std::isfinite(sum.yaw_max) && std::isfinite(sum.position_max) ? "" : " (an error is not finite)");
   } else {
     verdict = "certified and correct (every frame within " + fmt("%.3f rad and %.2f m)", o.yaw_bound, o.position_bound);
   }
