@@ -66,8 +66,12 @@ spin_rate=${spin_rate:-1.2}
 max_rounds=${max_rounds:-$(param max_rounds)}
 max_rounds=${max_rounds:-8}
 noise_quadratic=${noise_quadratic:-$(param noise_quadratic)}
-[[ "$seed" =~ ^[0-9]+$ ]] || die "--seed: expected a non-negative integer, got '$seed'"
-[[ "$max_rounds" =~ ^[0-9]+$ ]] || die "--max-rounds: expected a positive integer, got '$max_rounds'"
+[[ "$seed" =~ ^[0-9]{1,9}$ ]] || die "--seed: expected a non-negative integer (at most 9 digits), got '$seed'"
+[[ "$max_rounds" =~ ^[0-9]{1,6}$ ]] && [ "$((10#$max_rounds))" -ge 1 ] ||
+  die "--max-rounds: expected a positive integer, got '$max_rounds'"
+# Decimal, as run-sim.sh reads them ("08" is not octal; "010" is 10, not 8).
+seed=$((10#$seed))
+max_rounds=$((10#$max_rounds))
 [[ "$spin_rate" =~ ^[0-9]+([.][0-9]+)?$ ]] || die "--spin-rate: expected a number, got '$spin_rate'"
 [ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
   die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"

@@ -8,7 +8,7 @@
 // at the result's time, for reference). Prints a table, writes a top-down PNG and a JSON summary.
 // Exit codes: 0 certified, the drones agree and every frame is within the bounds; 3 not
 // certified; 4 certified but outside the bounds or the drones disagree (certified-wrong);
-// 2 bad flags, an unreadable log, no truth or no result.
+// 2 bad flags, an unreadable or damaged log, no truth, or a --json / --png that cannot be written.
 #include "common/app.h"
 #include "common/log_reader.h"
 #include "evaluate.h"
@@ -79,6 +79,17 @@ bool finite_truth(const fact::truth_t& t) {
       if (!std::isfinite(t.position[k][j])) return false;
   }
   return true;
+}
+
+// Writes the report; false (after saying why on stderr) when the file cannot be written whole
+// (an unwritable path or a full disk used to go unnoticed, with exit 0).
+bool write_json(const std::string& path, const nlohmann::json& j) {
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  out.flush();
+  if (out) return true;
+  std::cerr << kApp << ": error: cannot write the report " << path << "\n";
+  return false;
 }
 
 // Reads the log; false (with the reason) when it cannot be read at all.
@@ -361,7 +372,7 @@ int report_no_result(const Options& o, const RunLog& run, const fact::sim::World
     j["sim_duration_s"] = sim_duration_s(run);  // NaN is written as null
     j["drones"] = nlohmann::json::array();
     j["undecodable"] = run.undecodable;
-    std::ofstream(o.json) << j.dump(2) << "\n";
+    if (!write_json(o.json, j)) return 2;
   }
   if (!o.png.empty() && !write_png(o.png, world, run, {}, nullptr, {}, "no result")) {
     std::cerr << kApp << ": error: cannot write the picture " << o.png << "\n";
@@ -570,7 +581,7 @@ int run_report(const Options& o) {
                              {"yaw_error_rad", e.yaw_error},
                              {"position_error_m", e.position_error}});
     j["undecodable"] = run.undecodable;
-    std::ofstream(o.json) << j.dump(2) << "\n";
+    if (!write_json(o.json, j)) return 2;
   }
   if (!o.png.empty()) {
     const std::string title = res.status + " (" + res.mode + ")" + fmt(", %.0f rounds, %.1f s of simulated time", res.rounds_used, time_to_result) +
@@ -603,7 +614,8 @@ int main(int argc, char** argv) {
   cli.add_option("--rounds-channel", o.rounds_channel, "Complete-rounds channel base (+ _<id>)")->capture_default_str();
   cli.add_option("--clock-channel", o.clock_channel)->capture_default_str();
   cli.footer("Exit codes: 0 certified, the drones agree and every frame within the bounds; 3 not certified;\n"
-             "4 certified but outside the bounds or the drones disagree; 2 bad flags, unreadable log or no truth.\n"
+             "4 certified but outside the bounds, leaving out a drone, or the drones disagree; 2 bad flags,\n"
+             "an unreadable or damaged log, no truth, or a --json / --png that cannot be written.\n"
              "A log with no result at all is not certified (3).");
   try {
     cli.parse(argc, argv);
