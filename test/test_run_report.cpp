@@ -117,10 +117,11 @@ std::string encode(const T& m) {
 // yaw off by `yaw_error` (no result at all when `status` is "none"). With `drift` (rad/s), drone
 // 2's VIO yaw drifts at that rate, the result gives its frame as during round 1, and the log has
 // the swarm's rounds 0 (closed at 3 s) and 1 (closed at 6 s).
-std::string write_log(const std::string& status, double yaw_error, bool with_truth = true, double drift = 0) {
+std::string write_log(const std::string& status, double yaw_error, bool with_truth = true, double drift = 0,
+                      int result_drones = 3) {
   const std::string path = (fs::temp_directory_path() / ("fact-report-" + std::to_string(getpid()) + "-" + status +
-                                                         std::to_string(yaw_error) + "-" + std::to_string(drift) +
-                                                         ".lcm")).string();
+                                                         std::to_string(yaw_error) + "-" + std::to_string(drift) + "-" +
+                                                         std::to_string(result_drones) + ".lcm")).string();
   const auto drift_at = [&](int i, double t_s) { return i == 2 ? drift * t_s : 0.0; };
   lcm::LogFile log(path, "w");
   fact::swarm_result_t r{};
@@ -130,8 +131,8 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
   r.status = status;
   r.reference = 0;
   r.rounds_used = 2;
-  r.num_drones = 3;
-  for (int i = 0; i < 3; ++i) {
+  r.num_drones = result_drones;
+  for (int i = 0; i < result_drones; ++i) {
     fact::drone_pose_t p{};
     p.id = i;
     const Eigen::Matrix3d R0 = Eigen::AngleAxisd(-kFrames[0].frame_yaw, Vector3d::UnitZ()).toRotationMatrix();
@@ -234,6 +235,20 @@ TEST(RunReportApp, CorrectCertifiedResultExitsZeroWithItsNumbers) {
   EXPECT_EQ(std::string(sig + 1, 3), "PNG");
   EXPECT_GT(fs::file_size(png), 5000u);
   for (const auto& f : {log, json, png}) fs::remove(f);
+}
+
+// A NaN pose, or a result that leaves out drones of the truth, is not "certified and correct"
+// (review, helper-24: a NaN error counted as 0 and a reference-only result passed, exit 0).
+TEST(RunReportApp, NanOrIncompleteCertifiedResultExitsFour) {
+  const std::string nan = write_log("certified", std::nan("")), only_reference = write_log("certified", 0, true, 0, 1);
+  const Ran n = run_report("--log " + nan);
+  EXPECT_EQ(n.code, 4) << n.out;
+  EXPECT_NE(n.out.find("CERTIFIED BUT WRONG"), std::string::npos) << n.out;
+  const Ran o = run_report("--log " + only_reference);
+  EXPECT_EQ(o.code, 4) << o.out;
+  EXPECT_NE(o.out.find("CERTIFIED BUT INCOMPLETE: the result leaves out drone(s) 1, 2 of the truth"), std::string::npos)
+      << o.out;
+  for (const auto& f : {nan, only_reference}) fs::remove(f);
 }
 
 TEST(RunReportApp, WrongCertifiedResultExitsFourAndUncertifiedThree) {

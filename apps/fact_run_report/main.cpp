@@ -426,7 +426,7 @@ int run_report(const Options& o) {
   const bool all_certified = certified_drones > 0;
   std::string disagreement;
   for (const auto& [id, r] : chosen) {
-    if (r->msg.status != "certified" || result->msg.status != "certified") continue;
+    if (r == result || r->msg.status != "certified" || result->msg.status != "certified") continue;
     if (r->msg.drones.size() != result->msg.drones.size() || r->msg.reference != result->msg.reference)
       disagreement = "drone " + std::to_string(id) + "'s certified result has " + std::to_string(r->msg.drones.size()) +
                      " drones and reference " + std::to_string(r->msg.reference) + ", drone " +
