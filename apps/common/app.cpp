@@ -133,10 +133,13 @@ bool odometry_restarted(int64_t last_seq, int64_t last_utime, int64_t seq, int64
   return seq == 0 || last_seq - seq > kReorderSamples || utime < last_utime - kReorderUs;
 }
 
+void log_counted(const Log& log, const std::string& counter, int64_t n, const std::string& line) {
+  if (n <= 10 || n % 100 == 0) log.event(line + " (" + counter + " = " + std::to_string(n) + ")");
+}
+
 void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line) {
   status.count(counter);
-  const int64_t n = status.value(counter);
-  if (n <= 10 || n % 100 == 0) log.event(line + " (" + counter + " = " + std::to_string(n) + ")");
+  log_counted(log, counter, status.value(counter), line);
 }
 
 void Status::tick(int64_t now) {

@@ -160,8 +160,10 @@ std::string decode_error(const void* data, int size, T* msg) {
 // time just below the newest) is not a restart, and the caller refuses it as out of order.
 bool odometry_restarted(int64_t last_seq, int64_t last_utime, int64_t seq, int64_t utime);
 
-// Counts one event on `counter` and logs "<line> (<counter> = <total>)": the first 10, then every
-// 100th, so that a flood of bad input cannot flood the log.
+// Logs "<line> (<counter> = <n>)" for the n-th event of a counter kept elsewhere: the first 10,
+// then every 100th, so that a flood of bad input cannot flood the log.
+void log_counted(const Log& log, const std::string& counter, int64_t n, const std::string& line);
+// Counts one event on `counter` in the status and logs it as log_counted does.
 void count_and_log(Status& status, const Log& log, const std::string& counter, const std::string& line);
 
 // Decodes a received message; on failure (truncated, foreign fingerprint, garbage counts) counts

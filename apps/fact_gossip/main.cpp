@@ -271,13 +271,11 @@ class GossipApp {
       // Duplicates and replays are counted by the gossip (duplicate_envelopes, replayed); replays
       // are logged too (the first 10, then every 100th): a restarted drone whose clock went back
       // is refused until its clock passes its old numbers.
-      if (screen == fact::gossip::Screen::replay) {
-        const int64_t n = gossip_.counters().replayed;
-        if (n <= 10 || n % 100 == 0)
-          log_.event("envelope from drone " + std::to_string(env.sender_id) + " seq " + std::to_string(env.seq) +
-                     " is older than its replay window: dropped (replayed = " + std::to_string(n) +
-                     "; a drone restarted with its clock set back is refused until its clock passes its old numbers)");
-      }
+      if (screen == fact::gossip::Screen::replay)
+        fact::app::log_counted(log_, "replayed", gossip_.counters().replayed,
+                               "envelope from drone " + std::to_string(env.sender_id) + " seq " +
+                                   std::to_string(env.seq) + " is older than its replay window: dropped (a drone "
+                                   "restarted with its clock set back is refused until its clock passes its old numbers)");
       return;
     }
     std::string err;
@@ -316,7 +314,7 @@ class GossipApp {
   // 100th (refused odometry used to go to the status note only, silently).
   void note_refusal(const std::string& what, int64_t n, const std::string& line) {
     status_.note(line);
-    if (n <= 10 || n % 100 == 0) log_.event(line + " (" + what + " = " + std::to_string(n) + ")");
+    fact::app::log_counted(log_, what, n, line);
   }
 
   void log_limited(const std::string& line) {
