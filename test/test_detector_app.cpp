@@ -43,6 +43,7 @@ namespace {
 
 namespace fs = std::filesystem;
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLiveUrl = kUrl + "&recv_buf_size=4194304";  // whole 424 × 240 frames over udpm
 
 using fact::test::only_loopback;
 
@@ -76,9 +77,65 @@ int exit_code(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// This test's LCM endpoint: the detections on one channel and every status message, in arrival order.
+class Bus {
+ public:
+  Bus(const std::string& url, const std::string& detections_channel) : lcm_(url) {
+    lcm_.subscribe(detections_channel, &Bus::on_detections, this)->setQueueCapacity(100);
+    lcm_.subscribe("FACT_STATUS", &Bus::on_status, this)->setQueueCapacity(100);
+  }
+  bool good() { return lcm_.good(); }
+  lcm::LCM& lcm() { return lcm_; }
+  // Handles messages until done() or `ms` × FACT_TEST_TIME_SCALE have passed.
+  void pump_until(const std::function<bool()>& done, int ms) {
+    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::milliseconds(ms));
+    while (!done() && std::chrono::steady_clock::now() < end) lcm_.handleTimeout(20);
+  }
+  void pump(int ms) { pump_until([] { return false; }, ms); }
+  // A counter of the newest status message (−1 when it has none, or there is none).
+  int64_t counter(const std::string& name) const {
+    return status.empty() ? -1 : fact::app::counter_value(status.back(), name).value_or(-1);
+  }
+
+  std::vector<fact::detections_t> got;
+  std::vector<fact::app_status_t> status;
+
+ private:
+  void on_detections(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got.push_back(*m); }
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status.push_back(*m); }
+  lcm::LCM lcm_;
+};
+
+// Drone 2's 424 × 240 frame `seq` at `utime` (µs) of a wall `wall_mm` away, as a camera driver
+// publishes it on FACT_FRAMES_2.
+fact::frame_t wall_frame(int64_t seq, int64_t utime, int16_t wall_mm) {
+  const fact::CameraIntrinsics k = fact::d430_424x240();
+  fact::frame_t m;
+  m.utime = utime;
+  m.drone_id = 2;
+  m.seq = seq;
+  m.width = k.width;
+  m.height = k.height;
+  m.fx = k.fx, m.fy = k.fy, m.cx = k.cx, m.cy = k.cy;
+  m.gray_size = m.depth_size = k.width * k.height;
+  m.gray.assign(static_cast<size_t>(m.gray_size), 100);
+  m.depth_mm.assign(static_cast<size_t>(m.depth_size), wall_mm);
+  return m;
+}
+
 class DetectorApp : public fact::test::TempDirTest {
  protected:
   DetectorApp() : TempDirTest("fact-detector-app") {}
+
+  // fact-detector as drone 2 on kLiveUrl (stderr to dir_/err, a status every 0.2 s), once its
+  // first status has arrived on `bus` (it has subscribed then): its pid, or −1.
+  pid_t start_live(Bus& bus) {
+    const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", kLiveUrl, "--status-period", "0.2"}, dir_ / "err");
+    if (pid <= 0) return -1;
+    bus.pump_until([&] { return !bus.status.empty(); }, 5000);
+    EXPECT_FALSE(bus.status.empty()) << read_text(dir_ / "err");
+    return pid;
+  }
   void SetUp() override {
     TempDirTest::SetUp();
     if (HasFatalFailure()) return;  // no directory: nothing to create under it
@@ -119,31 +176,19 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
   cv::imwrite((dir_ / "png" / "1000999999_gray.png").string(), cv::Mat(480, 640, CV_8U, cv::Scalar(1)));
   cv::imwrite((dir_ / "png" / "1000999999_depth.png").string(), cv::Mat(240, 320, CV_16U, cv::Scalar(1000)));
 
-  lcm::LCM lcm(kUrl);
-  ASSERT_TRUE(lcm.good());
-  std::vector<fact::detections_t> got;
-  std::vector<fact::app_status_t> status;
-  struct Sink {
-    std::vector<fact::detections_t>* got;
-    std::vector<fact::app_status_t>* status;
-    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
-    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
-  } sink{&got, &status};
-  lcm.subscribe("FACT_DETECTIONS_4", &Sink::det, &sink)->setQueueCapacity(100);
-  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
+  Bus bus(kUrl, "FACT_DETECTIONS_4");
+  ASSERT_TRUE(bus.good());
+  const std::vector<fact::detections_t>& got = bus.got;
   const pid_t pid = spawn({"--png-dir", (dir_ / "png").string(), "--drone-id", "4", "--lcm-url", kUrl}, dir_ / "err");
   ASSERT_GT(pid, 0);
   int code = -2;
-  const auto start = std::chrono::steady_clock::now();
-  while (std::chrono::steady_clock::now() - start < fact::test::scaled(std::chrono::seconds(15))) {
-    lcm.handleTimeout(50);
+  bus.pump_until([&] {
     int st = 0;
-    if (code == -2 && waitpid(pid, &st, WNOHANG) == pid) {
-      code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-      for (int i = 0; i < 10; ++i) lcm.handleTimeout(20);
-      break;
-    }
-  }
+    if (waitpid(pid, &st, WNOHANG) != pid) return false;
+    code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return true;
+  }, 15000);
+  bus.pump(200);  // what it published last
   const std::string err = read_text(dir_ / "err");
   ASSERT_EQ(code, 0) << err;
   ASSERT_EQ(got.size(), static_cast<size_t>(frames)) << err;
@@ -169,11 +214,9 @@ TEST_F(DetectorApp, PngDirPublishesTrackedDetections) {
     EXPECT_NEAR(d.vector[2], 0.0, 0.02);
     EXPECT_GE(d.confidence, 0.9f);
   }
-  ASSERT_FALSE(status.empty());
-  const fact::app_status_t& last = status.back();
-  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
-  EXPECT_EQ(counter("size_mismatch"), 1) << err;
-  EXPECT_EQ(counter("published"), frames);
+  ASSERT_FALSE(bus.status.empty());
+  EXPECT_EQ(bus.counter("size_mismatch"), 1) << err;
+  EXPECT_EQ(bus.counter("published"), frames);
   EXPECT_NE(err.find("size_mismatch"), std::string::npos) << err;
   EXPECT_NE(err.find("gray 640 x 480, depth 320 x 240"), std::string::npos) << err;
   EXPECT_NE(err.find("231 odometry samples"), std::string::npos) << err;
@@ -208,43 +251,15 @@ TEST_F(DetectorApp, FlagsAndModelErrors) {
 // missing intrinsics, all-invalid depth, gray and depth of different sizes, another drone's frame,
 // a truncated message) is counted under its own name and logged, and the app keeps running.
 TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
-  const std::string url = kUrl + "&recv_buf_size=4194304";
-  lcm::LCM lcm(url);
-  ASSERT_TRUE(lcm.good());
-  std::vector<fact::detections_t> got;
-  std::vector<fact::app_status_t> status;
-  struct Sink {
-    std::vector<fact::detections_t>* got;
-    std::vector<fact::app_status_t>* status;
-    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
-    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
-  } sink{&got, &status};
-  lcm.subscribe("FACT_DETECTIONS_2", &Sink::det, &sink)->setQueueCapacity(100);
-  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
-  const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", url, "--status-period", "0.2"}, dir_ / "err");
+  Bus bus(kLiveUrl, "FACT_DETECTIONS_2");
+  ASSERT_TRUE(bus.good());
+  const pid_t pid = start_live(bus);
   ASSERT_GT(pid, 0);
-  // Handles messages until done() or `ms` × FACT_TEST_TIME_SCALE have passed.
-  auto pump_until = [&](const std::function<bool()>& done, int ms) {
-    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::milliseconds(ms));
-    while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
-  };
-  auto pump = [&](int ms) { pump_until([] { return false; }, ms); };
-  pump_until([&] { return !status.empty(); }, 5000);  // the app's first status: it has subscribed
-  ASSERT_FALSE(status.empty()) << read_text(dir_ / "err");
-  const fact::CameraIntrinsics k = fact::d430_424x240();
-  auto frame = [&](int64_t seq) {
-    fact::frame_t m;
-    m.utime = 2000000000 + seq * 66666;
-    m.drone_id = 2;
-    m.seq = seq;
-    m.width = k.width;
-    m.height = k.height;
-    m.fx = k.fx, m.fy = k.fy, m.cx = k.cx, m.cy = k.cy;
-    m.gray_size = m.depth_size = k.width * k.height;
-    m.gray.assign(static_cast<size_t>(m.gray_size), 100);
-    m.depth_mm.assign(static_cast<size_t>(m.depth_size), 6000);  // a wall at 6 m: nothing to detect
-    return m;
-  };
+  lcm::LCM& lcm = bus.lcm();
+  const std::vector<fact::detections_t>& got = bus.got;
+  auto pump = [&](int ms) { bus.pump(ms); };
+  // A wall at 6 m: nothing to detect.
+  auto frame = [](int64_t seq) { return wall_frame(seq, 2000000000 + seq * 66666, 6000); };
   int64_t seq = 0;
   auto good = [&]() {
     fact::frame_t m = frame(seq++);
@@ -294,15 +309,14 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
     lcm.publish("FACT_FRAMES_2", bytes.data(), static_cast<unsigned>(bytes.size() / 2));  // truncated
   }
   good();
-  pump_until([&] { return got.size() >= 9; }, 1200);
+  bus.pump_until([&] { return got.size() >= 9; }, 1200);
   kill(pid, SIGTERM);
   const int code = exit_code(pid);
   pump(300);
   const std::string err = read_text(dir_ / "err");
   EXPECT_EQ(code, 0) << err;
-  ASSERT_FALSE(status.empty()) << err;
-  const fact::app_status_t& last = status.back();
-  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
+  ASSERT_FALSE(bus.status.empty()) << err;
+  auto counter = [&](const std::string& name) { return bus.counter(name); };
   EXPECT_EQ(counter("published"), 9) << err;  // every good frame (the 481 × 1 one too), also after bad ones
   EXPECT_EQ(counter("bad_frame"), 1) << err;
   EXPECT_EQ(counter("bad_intrinsics"), 2) << err;
@@ -322,27 +336,12 @@ TEST_F(DetectorApp, LcmFramesBadOnesCountedAppKeepsRunning) {
 // pitch that follows reaches the detections' vectors. A seq going back (fact-vio-relay's restart
 // after a VIO clock reset) restarts the buffer instead of losing every later sample.
 TEST_F(DetectorApp, OdometryGlitchAndRestartDoNotFreezeTheAttitude) {
-  const std::string url = kUrl + "&recv_buf_size=4194304";
-  lcm::LCM lcm(url);
-  ASSERT_TRUE(lcm.good());
-  std::vector<fact::detections_t> got;
-  std::vector<fact::app_status_t> status;
-  struct Sink {
-    std::vector<fact::detections_t>* got;
-    std::vector<fact::app_status_t>* status;
-    void det(const lcm::ReceiveBuffer*, const std::string&, const fact::detections_t* m) { got->push_back(*m); }
-    void st(const lcm::ReceiveBuffer*, const std::string&, const fact::app_status_t* m) { status->push_back(*m); }
-  } sink{&got, &status};
-  lcm.subscribe("FACT_DETECTIONS_2", &Sink::det, &sink)->setQueueCapacity(100);
-  lcm.subscribe("FACT_STATUS", &Sink::st, &sink)->setQueueCapacity(100);
-  const pid_t pid = spawn({"--drone-id", "2", "--lcm-url", url, "--status-period", "0.2"}, dir_ / "err");
+  Bus bus(kLiveUrl, "FACT_DETECTIONS_2");
+  ASSERT_TRUE(bus.good());
+  const pid_t pid = start_live(bus);
   ASSERT_GT(pid, 0);
-  auto pump_until = [&](const std::function<bool()>& done, int ms) {
-    const auto end = std::chrono::steady_clock::now() + fact::test::scaled(std::chrono::milliseconds(ms));
-    while (!done() && std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
-  };
-  pump_until([&] { return !status.empty(); }, 5000);
-  ASSERT_FALSE(status.empty()) << read_text(dir_ / "err");
+  lcm::LCM& lcm = bus.lcm();
+  const std::vector<fact::detections_t>& got = bus.got;
 
   const fact::CameraIntrinsics k = fact::d430_424x240();
   int64_t odometry_seq = 0;
@@ -359,22 +358,13 @@ TEST_F(DetectorApp, OdometryGlitchAndRestartDoNotFreezeTheAttitude) {
   auto frame = [&](int64_t f, double pitch) {
     const int64_t t = 2000000000 + f * 66666;
     for (int64_t u = t - 66666 + 10000; u <= t; u += 10000) odometry(u, pitch, odometry_seq++);
-    fact::frame_t m;
-    m.utime = t;
-    m.drone_id = 2;
-    m.seq = f;
-    m.width = k.width;
-    m.height = k.height;
-    m.fx = k.fx, m.fy = k.fy, m.cx = k.cx, m.cy = k.cy;
-    m.gray_size = m.depth_size = k.width * k.height;
-    m.gray.assign(static_cast<size_t>(m.gray_size), 100);
-    m.depth_mm.assign(static_cast<size_t>(m.depth_size), 6000);
+    fact::frame_t m = wall_frame(f, t, 6000);
     const int hw = static_cast<int>(0.20 * k.fx / 3.0), hh = static_cast<int>(0.04 * k.fy / 3.0);
     for (int v = 120 - hh; v <= 120 + hh; ++v)
       for (int u = 212 - hw; u <= 212 + hw; ++u) m.depth_mm[static_cast<size_t>(v * k.width + u)] = 3000;
     lcm.publish("FACT_FRAMES_2", &m);
     const size_t before = got.size();
-    pump_until([&] { return got.size() > before; }, 2000);
+    bus.pump_until([&] { return got.size() > before; }, 2000);
   };
   for (int f = 0; f < 4; ++f) frame(f, 0.0);
   odometry(2000000000 + 4 * 66666 + 1000000000000, 0.0, odometry_seq++);  // 10⁶ s ahead
@@ -384,7 +374,7 @@ TEST_F(DetectorApp, OdometryGlitchAndRestartDoNotFreezeTheAttitude) {
   // The relay restarts after a VIO clock reset: seq 0 and earlier times, then frames at those times.
   odometry_seq = 0;
   for (int f = 10; f < 14; ++f) frame(f - 3000, 0.0);
-  pump_until([&] { return false; }, 500);
+  bus.pump(500);
   kill(pid, SIGTERM);
   const int code = exit_code(pid);
   const std::string err = read_text(dir_ / "err");
@@ -403,9 +393,8 @@ TEST_F(DetectorApp, OdometryGlitchAndRestartDoNotFreezeTheAttitude) {
   int confirmed = 0;
   for (size_t i = 5; i < 10; ++i) confirmed += got[i].count;
   EXPECT_GE(confirmed, 4) << err;
-  ASSERT_FALSE(status.empty());
-  const fact::app_status_t& last = status.back();
-  auto counter = [&](const std::string& name) { return fact::app::counter_value(last, name).value_or(-1); };
+  ASSERT_FALSE(bus.status.empty());
+  auto counter = [&](const std::string& name) { return bus.counter(name); };
   EXPECT_EQ(counter("odometry_out_of_order"), 2) << err;  // the sample far ahead, the reordered one
   EXPECT_EQ(counter("odometry_restarts"), 1) << err;
   EXPECT_NE(err.find("is more than 10 s after the newest sample"), std::string::npos) << err;
