@@ -733,11 +733,16 @@ TEST(RoundBuilder, DetectionsAreInterpolatedBetweenOdometrySamples) {
   EXPECT_FALSE(b.odometry_at(-1, &p, &y));
 }
 
-TEST(RoundBuilder, PeriodModeAndBadSamples) {
+// Period mode: back-to-back rounds of 1 s, each closed 100 ms (odometry time) after its end.
+BuilderOptions period_mode() {
   BuilderOptions bo;
   bo.round_period_us = kS;
   bo.latency_us = 100 * kMs;
-  RoundBuilder b(bo);
+  return bo;
+}
+
+TEST(RoundBuilder, PeriodModeAndBadSamples) {
+  RoundBuilder b(period_mode());
   std::vector<BuiltRound> rounds;
   for (int i = 0; i <= 305; ++i) {
     const double t = 10 + i * 0.01;
@@ -772,10 +777,7 @@ TEST(RoundBuilder, PeriodModeAndBadSamples) {
 // the empty periods inside the gap are skipped, not closed one by one (one sample 1.7e9 s late
 // made 1.7e9 empty rounds and ran out of memory), and the period boundaries stay where they were.
 TEST(RoundBuilder, PeriodModeRestartsThePeriodAfterAGap) {
-  BuilderOptions bo;
-  bo.round_period_us = kS;
-  bo.latency_us = 100 * kMs;
-  RoundBuilder b(bo);
+  RoundBuilder b(period_mode());
   std::vector<BuiltRound> rounds;
   const auto feed = [&](double from_s, int samples) {
     for (int i = 0; i < samples; ++i) {
@@ -803,10 +805,7 @@ TEST(RoundBuilder, PeriodModeRestartsThePeriodAfterAGap) {
 // restart(): the odometry's clock went back (a VIO reset); the builder takes the new clock's
 // samples and builds rounds again, with its counters kept.
 TEST(RoundBuilder, RestartTakesANewClock) {
-  BuilderOptions bo;
-  bo.round_period_us = kS;
-  bo.latency_us = 100 * kMs;
-  RoundBuilder b(bo);
+  RoundBuilder b(period_mode());
   for (int i = 0; i < 120; ++i) b.add_odometry(at_s(100 + i * 0.01), SpinScenario::position(100), 0.0);
   EXPECT_EQ(b.take_rounds().size(), 1u);
   EXPECT_NE(b.add_odometry(at_s(5), SpinScenario::position(5), 0.0), "");  // earlier: refused
