@@ -464,34 +464,39 @@ TEST(FcBridge, SerialLinkOnAPseudoTerminal) {
 }
 
 TEST(FcBridge, FlagsAndLinkErrors) {
-  std::string log;
-  EXPECT_EQ(run_to_exit({"--help"}, &log), 0);
-  EXPECT_NE(log.find("--geofence"), std::string::npos);
-  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://"}, &log), 2);
-  EXPECT_NE(log.find("exactly one of --udp and --serial"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--serial", "/dev/null", "--baud", "12345"}, &log), 2);
-  EXPECT_NE(log.find("--baud: 12345 is not a supported rate"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "14540:127.0.0.1:99999"}, &log), 2);
-  EXPECT_NE(log.find("remote port '99999'"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--geofence", "1,2,3"}, &log), 2);
-  EXPECT_NE(log.find("--geofence: expected 6 numbers"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--stream-rate", "2"}, &log), 2);
-  EXPECT_NE(log.find("more than 2 Hz"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--sysid", "0"}, &log), 2);
-  // Timeouts that round to 0 µs or never expire, a state rate that spins the loop, a fence beyond
-  // a float's range (review, session 30: all were accepted).
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--setpoint-timeout", "1e-9"}, &log), 2);
-  EXPECT_NE(log.find("--setpoint-timeout: expected a number in [0.01, 60] s, got 1e-09"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--heartbeat-timeout", "1e13"}, &log), 2);
-  EXPECT_NE(log.find("--heartbeat-timeout: expected a number in [0.01, 60] s, got 1e+13"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--state-rate", "1e7"}, &log), 2);
-  EXPECT_NE(log.find("--state-rate: expected a number in [0.01, 100] Hz, got 1e+07"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--udp", "1:127.0.0.1:2", "--geofence", "-1e39,1,-1,1,0,1"}, &log), 2);
-  EXPECT_NE(log.find("--geofence: '-1e39' in '-1e39,1,-1,1,0,1' is beyond ±1e+06 m"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/nonexistent/ttyFACT"}, &log), 1);
-  EXPECT_NE(log.find("cannot open serial device '/nonexistent/ttyFACT'"), std::string::npos) << log;
-  EXPECT_EQ(run_to_exit({"--lcm-url", "memq://", "--serial", "/dev/null"}, &log), 1);
-  EXPECT_NE(log.find("is not a serial device"), std::string::npos) << log;
+  // Each run: the flags, the exit code, and what the log must say ("" = only the code).
+  struct Case {
+    std::vector<std::string> args;
+    int code;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"--help"}, 0, "--geofence"},
+      {{"--lcm-url", "memq://"}, 2, "exactly one of --udp and --serial"},
+      {{"--serial", "/dev/null", "--baud", "12345"}, 2, "--baud: 12345 is not a supported rate"},
+      {{"--udp", "14540:127.0.0.1:99999"}, 2, "remote port '99999'"},
+      {{"--udp", "1:127.0.0.1:2", "--geofence", "1,2,3"}, 2, "--geofence: expected 6 numbers"},
+      {{"--udp", "1:127.0.0.1:2", "--stream-rate", "2"}, 2, "more than 2 Hz"},
+      {{"--udp", "1:127.0.0.1:2", "--sysid", "0"}, 2, ""},
+      // Timeouts that round to 0 µs or never expire, a state rate that spins the loop, a fence beyond
+      // a float's range (review, session 30: all were accepted).
+      {{"--udp", "1:127.0.0.1:2", "--setpoint-timeout", "1e-9"}, 2,
+       "--setpoint-timeout: expected a number in [0.01, 60] s, got 1e-09"},
+      {{"--udp", "1:127.0.0.1:2", "--heartbeat-timeout", "1e13"}, 2,
+       "--heartbeat-timeout: expected a number in [0.01, 60] s, got 1e+13"},
+      {{"--udp", "1:127.0.0.1:2", "--state-rate", "1e7"}, 2,
+       "--state-rate: expected a number in [0.01, 100] Hz, got 1e+07"},
+      {{"--udp", "1:127.0.0.1:2", "--geofence", "-1e39,1,-1,1,0,1"}, 2,
+       "--geofence: '-1e39' in '-1e39,1,-1,1,0,1' is beyond ±1e+06 m"},
+      {{"--lcm-url", "memq://", "--serial", "/nonexistent/ttyFACT"}, 1,
+       "cannot open serial device '/nonexistent/ttyFACT'"},
+      {{"--lcm-url", "memq://", "--serial", "/dev/null"}, 1, "is not a serial device"},
+  };
+  for (const Case& c : cases) {
+    std::string log;
+    EXPECT_EQ(run_to_exit(c.args, &log), c.code) << c.args[0] << " " << (c.args.size() > 1 ? c.args[1] : "");
+    EXPECT_NE(log.find(c.says), std::string::npos) << log;
+  }
 }
 
 int main(int argc, char** argv) { return fact::test::main_in_private_netns(argc, argv, FACT_NETNS_RUN); }
