@@ -287,12 +287,11 @@ std::vector<int> drone_ids(const DroneConfig& c) {
 namespace {
 
 // Whether a takeoff spot keeps `clearance` from walls and obstacles along its whole climb
-// column (z from the spot to height_max) and min_separation (horizontal) from earlier spots.
-bool spot_ok(const World& w, const Eigen::Vector3d& p, const std::vector<DroneStart>& placed) {
+// column (z from the spot to height_max) and `separation` (horizontal) from earlier spots.
+bool spot_ok(const World& w, const Eigen::Vector3d& p, const std::vector<DroneStart>& placed, double separation) {
   const DroneConfig& c = w.drone_config;
-  const double r = bounding_radius(DroneBody{});
   for (const auto& s : placed)
-    if ((s.position - p).head<2>().norm() < std::max(c.min_separation, 2 * r)) return false;
+    if ((s.position - p).head<2>().norm() < separation) return false;
   const double top = std::max(c.height_max, p.z());
   for (double z = p.z(); z <= top + 1e-9; z += 0.25) {
     Eigen::Vector3d q(p.x(), p.y(), z);
@@ -312,7 +311,8 @@ std::string place_random_starts(World* w, uint64_t seed) {
   const Eigen::Vector3d lo = room_min(*w), hi = room_max(*w);
   // At least the body's radius from the walls, whatever clearance says (dynamics stops the centre
   // there: a start closer jumped to it on the first step).
-  const double wall = std::max(c.clearance, bounding_radius(DroneBody{}));
+  const double r = bounding_radius(DroneBody{});
+  const double wall = std::max(c.clearance, r), separation = std::max(c.min_separation, 2 * r);
   if (hi.x() - lo.x() <= 2 * wall || hi.y() - lo.y() <= 2 * wall)
     return "room " + num(w->room_size.x()) + " x " + num(w->room_size.y()) + " m is too small for clearance " +
            num(wall) + " m";
@@ -329,7 +329,7 @@ std::string place_random_starts(World* w, uint64_t seed) {
       const double y = uy(rng);
       const double x = ux(rng);
       const Eigen::Vector3d p(x, y, 0.0);
-      if (!spot_ok(*w, p, placed)) continue;
+      if (!spot_ok(*w, p, placed, separation)) continue;
       placed.push_back(DroneStart{ids[i], p, uyaw(rng)});
       ok = true;
     }
@@ -345,6 +345,7 @@ std::string place_random_starts(World* w, uint64_t seed) {
 std::string starts_error(const World& w) {
   std::set<int> seen;
   const Eigen::Vector3d lo = room_min(w), hi = room_max(w);
+  const double r = bounding_radius(DroneBody{});  // the body must fit where it starts
   for (size_t i = 0; i < w.starts.size(); ++i) {
     const DroneStart& s = w.starts[i];
     const std::string where = "start " + std::to_string(i) + " (drone " + std::to_string(s.id) + ")";
@@ -358,7 +359,6 @@ std::string starts_error(const World& w) {
     // The body must fit where it starts: the drone's radius from the walls and the ceiling (where
     // dynamics stops its centre), clear of every obstacle and of the drones before it (two drones
     // on one spot, or one inside a box, flew without complaint).
-    const double r = bounding_radius(DroneBody{});
     for (int k = 0; k < 3; ++k)
       if ((k < 2 && s.position[k] < lo[k] + r) || s.position[k] > hi[k] - r)
         return where + ": position[" + std::to_string(k) + "] = " + num(s.position[k]) + " is closer than the drone's radius " +
@@ -376,7 +376,7 @@ std::string starts_error(const World& w) {
   }
   // Every drone's hover height must fit under the ceiling, whether the file gave the range or not.
   const DroneConfig& c = w.drone_config;
-  if (c.height_max > w.room_size.z() - bounding_radius(DroneBody{}))
+  if (c.height_max > w.room_size.z() - r)
     return "drones.height max " + num(c.height_max) + " m is above the ceiling " + num(w.room_size.z()) +
            " m less the drone's radius (set drones.height or a higher room)";
   return "";
