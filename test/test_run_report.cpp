@@ -114,7 +114,7 @@ std::string encode(const T& m) {
 }
 
 // A 10 s run of 3 drones hovering at 1.5 m; drone 0 publishes `status` at 8 s with drone 2's
-// yaw off by `yaw_error` (no result at all when `status` is "none"). With `drift` (rad/s), drone
+// yaw off by `yaw_error` (no result at all when `status` is "none", a truncated one when "damaged"). With `drift` (rad/s), drone
 // 2's VIO yaw drifts at that rate, the result gives its frame as during round 1, and the log has
 // the swarm's rounds 0 (closed at 3 s) and 1 (closed at 6 s).
 std::string write_log(const std::string& status, double yaw_error, bool with_truth = true, double drift = 0,
@@ -184,7 +184,11 @@ std::string write_log(const std::string& status, double yaw_error, bool with_tru
     }
     if (with_truth) write_event(log, kEpoch + t, "FACT_TRUTH", encode(tr));
     if (drift != 0 && t == 6000000) write_event(log, kEpoch + t, "FACT_SWARM_ROUNDS_0", encode(rounds));
-    if (t == 8000000 && status != "none") write_event(log, kEpoch + t, "FACT_RESULT_0", encode(r));  // in log order
+    if (t == 8000000 && status != "none") {  // in log order; "damaged": cut in half
+      std::string bytes = encode(r);
+      if (status == "damaged") bytes.resize(bytes.size() / 2);
+      write_event(log, kEpoch + t, "FACT_RESULT_0", bytes);
+    }
   }
   return path;
 }
@@ -294,6 +298,11 @@ TEST(RunReportApp, BadInputExitsTwoWithTheReason) {
   EXPECT_NE(g.out.find("error"), std::string::npos) << g.out;
   fs::remove(garbage);
   EXPECT_EQ(run_report("--log /nonexistent/run.lcm").code, 2);
+  const std::string damaged = write_log("damaged", 0);  // its only result cannot be decoded
+  const Ran d = run_report("--log " + damaged);
+  EXPECT_EQ(d.code, 2) << d.out;
+  EXPECT_NE(d.out.find("damaged log: 1 undecodable result(s) on FACT_RESULT_0"), std::string::npos) << d.out;
+  fs::remove(damaged);
   const Ran b = run_report("--log x --yaw-bound -1");
   EXPECT_EQ(b.code, 2);
   EXPECT_NE(b.out.find("--yaw-bound"), std::string::npos) << b.out;

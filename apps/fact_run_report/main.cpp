@@ -401,7 +401,17 @@ int run_report(const Options& o) {
       return 2;
     }
   }
-  if (run.results.empty()) return report_no_result(o, run, world);
+  if (run.results.empty()) {
+    // Results that are there but cannot be decoded are a damaged log (2), not a run that
+    // published nothing (3).
+    for (const auto& [channel, count] : run.undecodable)
+      if (starts_with(channel, o.result_channel + "_")) {
+        std::cerr << kApp << ": error: damaged log: " << count << " undecodable result(s) on " << channel
+                  << " and no decodable result in " << o.log << "\n";
+        return 2;
+      }
+    return report_no_result(o, run, world);
+  }
   // Each drone's first certified result, else its last. Every drone's solver gets the same
   // complete rounds and publishes the same bytes, so the run is certified when a drone published a
   // certified result (the log may have missed another drone's copy under load) and no two
@@ -616,7 +626,7 @@ int main(int argc, char** argv) {
   cli.footer("Exit codes: 0 certified, the drones agree and every frame within the bounds; 3 not certified;\n"
              "4 certified but outside the bounds, leaving out a drone, or the drones disagree; 2 bad flags,\n"
              "an unreadable or damaged log, no truth, or a --json / --png that cannot be written.\n"
-             "A log with no result at all is not certified (3).");
+             "A log with no result at all is not certified (3); one whose results cannot be decoded is damaged (2).");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
