@@ -39,7 +39,6 @@ struct DroneTrace {
   std::string last_status, last_reason;   // of the last result
   int last_rounds = 0;
   std::vector<std::string> planner_states;  // "<phase> round <k>", consecutive repeats dropped
-  std::string planner_final;                // the last full state string
   // Messages of one channel against the publishing app's counter, from its first heartbeat in
   // the log on (a log may start after the app did).
   struct Tally {
@@ -102,7 +101,6 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
       if (m.app != "fact-planner") return;
       const std::string d = decision(m.state);
       if (!d.empty() && (t.planner_states.empty() || t.planner_states.back() != d)) t.planner_states.push_back(d);
-      if (!d.empty()) t.planner_final = m.state;
     }
   });
   if (!why.empty()) std::cerr << kApp << ": error: " << why << "\n";
@@ -141,7 +139,7 @@ int main(int argc, char** argv) {
   std::vector<int> drones;
   bool no_planner = false;
   CLI::App cli{"fact-log-compare: checks that a replay matches the recorded run: solver results byte for byte,\n"
-               "planner decisions (phase and round sequence, final state).",
+               "planner decisions (the sequence of phases and rounds, the last one included).",
                kApp};
   cli.add_option("original", original, "LCM log of the recorded run")->required()->type_name("ORIGINAL.lcm");
   cli.add_option("replay", replay, "LCM log of the replay")->required()->type_name("REPLAY.lcm");
