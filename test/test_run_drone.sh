@@ -3,7 +3,7 @@
 # small world, its simulated PX4 on MAVLink/UDP 127.0.0.1:14600) stands in for the drone's camera
 # driver, VIO and flight controller. run-drone.sh --check-only starts the relay and the bridge and
 # runs fact-preflight: it passes with everything present, and fails, naming the item, with a
-# missing key, a key other users may read or write, a flight controller on the wrong port and no
+# missing key, a key other users may read or write or own, a flight controller on the wrong port and no
 # camera frames; bad flag values exit 2 before anything starts, and SIGTERM during the checklist
 # exits 143 with nothing left running.
 #
@@ -52,6 +52,12 @@ for mode in 644 640 602; do  # readable or writable by another user
   grep -q "\[FAIL\] swarm key.*open to other users (mode $mode)" "$WORK/out" || fail "a key of mode $mode did not fail"
 done
 chmod 600 "$WORK/swarm.key"
+if [ "$(id -u)" = 0 ]; then  # another user's key (that user may rewrite it); only root can chown
+  cp "$WORK/swarm.key" "$WORK/other.key"
+  chown 65534 "$WORK/other.key"
+  check 1 --fc udp:14542:127.0.0.1:14600 --key "$WORK/other.key" --preflight-timeout "$(scaled 3)"
+  grep -q "\[FAIL\] swarm key.*owned by uid 65534" "$WORK/out" || fail "a key owned by another user did not fail"
+fi
 check 1 --fc udp:14543:127.0.0.1:14699 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)"
 grep -q "\[FAIL\] flight controller" "$WORK/out" || fail "a flight controller on the wrong port did not fail"
 check 1 --fc udp:14544:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout "$(scaled 3)" \

@@ -2,8 +2,8 @@
 // planner (the app that makes the drone move) is started. Each item is one line, PASS or FAIL
 // with what was seen:
 //   swarm key          --key-file loads as fact-gossip loads it (32 raw bytes or 64 hex digits), is
-//                      a regular file and no other user may read or write it (mode 600 or 400),
-//                      or --insecure was chosen;
+//                      a regular file owned by this user or root that no other user may read or
+//                      write (mode 600 or 400), or --insecure was chosen;
 //   flight controller  fact-fc-bridge reports the FC's HEARTBEAT fresh (fact::fc_state_t
 //                      connected on FACT_FC_STATE_<id>) and the FC standby or active (MAV_STATE
 //                      3 or 4, not booting, calibrating, critical, emergency or terminated);
@@ -28,6 +28,7 @@
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -84,6 +85,11 @@ Item check_key(const Options& o) {
     char mode[8];
     std::snprintf(mode, sizeof mode, "%03o", static_cast<unsigned>(st.st_mode & 0777));
     it.seen = o.key_file + " is open to other users (mode " + mode + "): chmod 600 it";
+    return it;
+  }
+  if (st.st_uid != geteuid() && st.st_uid != 0) {  // its owner may rewrite it and chmod it open
+    it.seen = o.key_file + " is owned by uid " + std::to_string(st.st_uid) + ", not by this user (uid " +
+              std::to_string(geteuid()) + ") or root: chown it";
     return it;
   }
   it.pass = true;
