@@ -118,6 +118,7 @@ std::string check_options(const Options& o) {
   if (o.max_observations < 0) return "max_observations is negative";
   if (o.max_request_rounds < 1) return "max_request_rounds must be ≥ 1";
   if (o.replay_window < 1 || o.replay_window > 65536) return "replay_window must be in 1 … 65536";
+  if (o.challenge_timeout_us <= 0) return "challenge_timeout must be > 0";
   if (o.summary_period_us <= 0) return "summary_period must be > 0";
   if (o.summary_min_interval_us < 0) return "summary_min_interval is negative";
   if (o.silence_timeout_us <= 0) return "silence_timeout must be > 0";
@@ -172,7 +173,10 @@ std::vector<std::pair<std::string, int64_t>> Counters::list() const {
           {"answers_suppressed", answers_suppressed},
           {"summaries_sent", summaries_sent},
           {"requests_sent", requests_sent},
-          {"members_silenced", members_silenced}};
+          {"members_silenced", members_silenced},
+          {"challenges_sent", challenges_sent},
+          {"senders_renumbered", senders_renumbered},
+          {"challenge_answers_refused", challenge_answers_refused}};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -249,6 +253,11 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
   }
   const uint64_t w = static_cast<uint64_t>(opt_.replay_window);
   if (n->seq_seen.empty()) n->seq_seen.assign((w + 63) / 64, 0);
+  if (n->stale && seq > n->seq_high && static_cast<uint64_t>(seq) - static_cast<uint64_t>(n->seq_high) > w &&
+      seq <= n->stale_high) {  // a number of the run before the sender's renumbering
+    ++counters_.replayed;
+    return Screen::replay;
+  }
   const auto bit = [&](int64_t s) -> std::pair<size_t, uint64_t> {
     const uint64_t i = static_cast<uint64_t>(s) % w;
     return {static_cast<size_t>(i / 64), 1ull << (i % 64)};
@@ -264,6 +273,7 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
     }
     n->seq_init = true;
     n->seq_high = seq;
+    if (n->stale && seq > n->stale_high) n->stale = false;  // the new numbers passed the old ones
   } else {
     if (static_cast<uint64_t>(n->seq_high) - static_cast<uint64_t>(seq) >= w) {
       ++counters_.replayed;
@@ -279,6 +289,42 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
   n->seq_seen[word] |= mask;
   hear(sender, now);
   return Screen::accept;
+}
+
+bool Gossip::open_challenge(int64_t now, int sender, const Nonce& nonce) {
+  auto it = nodes_.find(sender);
+  if (it == nodes_.end() || !it->second.seq_init || sender == opt_.self_id) return false;
+  Node& n = it->second;
+  if (n.challenged && now - n.challenged_at < opt_.challenge_timeout_us) return false;
+  n.challenged = true;
+  n.challenge = nonce;
+  n.challenged_at = now;
+  ++counters_.challenges_sent;
+  return true;
+}
+
+bool Gossip::answer_challenge(int64_t now, int sender, int64_t seq, const Nonce& nonce) {
+  auto it = nodes_.find(sender);
+  Node* n = it == nodes_.end() ? nullptr : &it->second;
+  if (n == nullptr || !n->challenged || now - n->challenged_at > opt_.challenge_timeout_us || n->challenge != nonce) {
+    ++counters_.challenge_answers_refused;
+    return false;
+  }
+  n->challenged = false;
+  if (seq < n->seq_high) {  // the previous run's numbers above the new window stay refused
+    n->stale_high = n->stale ? std::max(n->stale_high, n->seq_high) : n->seq_high;
+    n->stale = true;
+  }
+  event("drone " + std::to_string(sender) + " answered a challenge: its envelope numbers restart at " +
+        std::to_string(seq) + " (they were up to " + std::to_string(n->seq_high) +
+        ": restarted with its clock set back)");
+  n->seq_high = seq;
+  std::fill(n->seq_seen.begin(), n->seq_seen.end(), 0);
+  const uint64_t i = static_cast<uint64_t>(seq) % static_cast<uint64_t>(opt_.replay_window);
+  n->seq_seen[static_cast<size_t>(i / 64)] |= 1ull << (i % 64);
+  ++counters_.senders_renumbered;
+  hear(sender, now);
+  return true;
 }
 
 std::string Gossip::store(Node& n, const Packet& p, int64_t now) {

@@ -63,6 +63,7 @@ int main(int argc, char** argv) {
               send(lcm, "FACT_GOSSIP", s::gossip_packet(t, id), status) &&
               send(lcm, "FACT_SAMPLE_ROUND_PACKET", s::round_packet(t, id, i), status) &&
               send(lcm, "FACT_SAMPLE_GOSSIP_REQUEST", s::gossip_request(t, id), status) &&
+              send(lcm, "FACT_SAMPLE_GOSSIP_CHALLENGE", s::gossip_challenge(t, id), status) &&
               send(lcm, "FACT_SAMPLE_GOSSIP_SUMMARY", s::gossip_summary(t, id), status) &&
               send(lcm, channel("FACT_SWARM_ROUNDS", id), s::swarm_rounds(t, id), status) &&
               send(lcm, channel("FACT_RESULT", id), s::swarm_result(t, id), status) &&

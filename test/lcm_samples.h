@@ -7,6 +7,7 @@
 #include "fact/fc_state_t.hpp"
 #include "fact/frame_t.hpp"
 #include "fact/gossip_packet_t.hpp"
+#include "fact/gossip_challenge_t.hpp"
 #include "fact/gossip_request_t.hpp"
 #include "fact/gossip_summary_t.hpp"
 #include "fact/odometry_t.hpp"
@@ -198,6 +199,14 @@ inline fact::gossip_request_t gossip_request(int64_t utime, int id) {
   m.origin = 4;
   m.rounds = {0, 2, 3};
   m.count = static_cast<int32_t>(m.rounds.size());
+  return m;
+}
+
+inline fact::gossip_challenge_t gossip_challenge(int64_t utime, int id) {
+  fact::gossip_challenge_t m;
+  m.utime = utime;
+  m.peer_id = id;
+  for (int k = 0; k < 16; ++k) m.nonce[k] = static_cast<uint8_t>(17 * k + 3);
   return m;
 }
 

@@ -222,6 +222,48 @@ TEST(GossipEnvelope, DuplicatesReplaysAndRestartedSenders) {
   EXPECT_EQ(g.counters().replayed, 2);
 }
 
+// A sender restarted with its clock set back numbers its envelopes below its old ones: they screen
+// as replays until it answers a challenge with the outstanding nonce; then its new numbers pass,
+// and the old run's numbers (a recording of them) stay refused.
+TEST(GossipEnvelope, RenumberedSenderIsTakenBackAfterAnsweringAChallenge) {
+  Options o = base_options(0);
+  o.replay_window = 64;
+  Gossip g(o, 0);
+  const int64_t old_start = 1700000000000000, new_start = old_start - 3600 * kS;  // clock back an hour
+  const Nonce nonce{1, 2, 3}, other{9};
+  EXPECT_FALSE(g.open_challenge(kMs, 1, nonce));  // never heard: nothing to challenge
+  for (int k = 0; k < 200; ++k) ASSERT_EQ(g.screen_envelope(kMs, 1, old_start + k), Screen::accept);
+  EXPECT_EQ(g.screen_envelope(kS, 1, new_start), Screen::replay);
+  EXPECT_TRUE(g.open_challenge(kS, 1, nonce));
+  EXPECT_FALSE(g.open_challenge(kS + kMs, 1, other));  // one outstanding challenge per sender
+  EXPECT_EQ(g.counters().challenges_sent, 1);
+  // Answers with the wrong nonce, from another sender, or before any challenge are refused.
+  EXPECT_FALSE(g.answer_challenge(kS + 2 * kMs, 1, new_start + 1, other));
+  EXPECT_FALSE(g.answer_challenge(kS + 2 * kMs, 2, new_start + 1, nonce));
+  EXPECT_EQ(g.counters().challenge_answers_refused, 2);
+  EXPECT_TRUE(g.answer_challenge(kS + 3 * kMs, 1, new_start + 1, nonce));
+  EXPECT_EQ(g.counters().senders_renumbered, 1);
+  EXPECT_FALSE(g.answer_challenge(kS + 4 * kMs, 1, new_start + 2, nonce));  // used up
+  EXPECT_EQ(g.screen_envelope(kS + 5 * kMs, 1, new_start + 1), Screen::duplicate);  // the answer itself
+  EXPECT_EQ(g.screen_envelope(kS + 5 * kMs, 1, new_start + 2), Screen::accept);
+  EXPECT_EQ(g.screen_envelope(kS + 5 * kMs, 1, new_start), Screen::accept);  // reordered, in the window
+  // The old run played again: refused, and the sender's new numbers still pass.
+  EXPECT_EQ(g.screen_envelope(kS + 6 * kMs, 1, old_start + 150), Screen::replay);
+  EXPECT_EQ(g.screen_envelope(kS + 6 * kMs, 1, old_start + 199), Screen::replay);
+  EXPECT_EQ(g.screen_envelope(kS + 6 * kMs, 1, new_start + 3), Screen::accept);
+  // Numbers past the old run's highest are new again.
+  EXPECT_EQ(g.screen_envelope(kS + 7 * kMs, 1, old_start + 1000), Screen::accept);
+  EXPECT_EQ(g.screen_envelope(kS + 7 * kMs, 1, new_start + 4), Screen::replay);
+  // A challenge not answered in time expires: the late answer is refused, a new challenge may go.
+  EXPECT_TRUE(g.open_challenge(2 * kS, 1, other));
+  EXPECT_FALSE(g.open_challenge(2 * kS + o.challenge_timeout_us - 1, 1, nonce));
+  EXPECT_FALSE(g.answer_challenge(2 * kS + o.challenge_timeout_us + 1, 1, new_start + 5, other));
+  EXPECT_TRUE(g.open_challenge(2 * kS + o.challenge_timeout_us, 1, nonce));
+  bool logged = false;
+  for (const std::string& e : g.take_events()) logged |= e.find("drone 1 answered a challenge") != std::string::npos;
+  EXPECT_TRUE(logged);
+}
+
 // --------------------------------------------------------------------------------------------
 // Summaries, requests, answers
 

@@ -530,6 +530,63 @@ TEST_F(GossipProcesses, WallClockStepsNeitherFreezeNorSplitTheSwarm) {
   for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
   EXPECT_NE(tail(log_, 400).find("another process uses drone id 2"), std::string::npos);
 }
+
+// Drone 2's gossip dies and restarts with its wall clock an hour back (a board without a real-time
+// clock): its envelope numbers are below its old ones, which drone 1 refuses as replays. Drone 1
+// challenges it, drone 2 answers, and drone 1 takes its new numbers: both complete the next
+// round together. Before the challenge, drone 1 refused drone 2 until its clock passed the old
+// numbers (an hour), and drone 2 went silent for it.
+TEST_F(GossipProcesses, ASenderRestartedWithItsClockBackIsTakenBackAfterAChallenge) {
+  const std::string url = drone_url(5);
+  Observer obs({url});
+  ASSERT_TRUE(obs.good);
+  const std::string shift = dir_ + "/clock_shift_back";
+  std::ofstream(shift) << "-3600\n";
+  const auto args = [&](int id) {
+    return std::vector<std::string>{FACT_GOSSIP_BINARY, "--drone-id", std::to_string(id), "--lcm-url", url,
+                                    "--key-file", dir_ + "/swarm.key", "--session", "restart-test",
+                                    "--rounds-from-channel", "--min-members", "2", "--summary-period", "0.3",
+                                    "--silence-timeout", "2", "--settle", "0.3", "--status-period", "0.2"};
+  };
+  const auto inject = [&](int round) {
+    for (int id : {1, 2}) {
+      const fact::round_packet_t m = injected(id, round);
+      obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
+    }
+  };
+  const auto complete = [&](int id, int rounds) {
+    auto it = obs.latest_rounds.find(id);
+    return it != obs.latest_rounds.end() && it->second.complete_rounds == rounds && it->second.num_drones == 2;
+  };
+  Processes procs;
+  procs.start("gossip1", args(1), log_);
+  procs.start("gossip2", args(2), log_);
+  ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
+  inject(0);
+  inject(1);
+  ASSERT_TRUE(obs.wait_for([&] { return complete(1, 2) && complete(2, 2); }, 5));
+  procs.kill_now("gossip2");
+  obs.latest_rounds.erase(2);
+  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
+  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
+  procs.start("gossip2", args(2), log_);
+  ::unsetenv("LD_PRELOAD");
+  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  // The restarted drone 2 recovers rounds 0–1 (answers to its requests), then both complete round 2.
+  EXPECT_TRUE(obs.wait_for([&] { return complete(2, 2); }, 5)) << "the restarted drone 2 did not recover rounds 0–1";
+  inject(2);
+  EXPECT_TRUE(obs.wait_for([&] { return complete(1, 3) && complete(2, 3); }, 5))
+      << "drone 1 did not take the restarted drone 2's rounds";
+  EXPECT_EQ(content_bytes(obs.latest_rounds[1]), content_bytes(obs.latest_rounds[2]));
+  obs.settle(0.5);
+  auto& drone1 = obs.counters[{"fact-gossip", 1}];
+  auto& drone2 = obs.counters[{"fact-gossip", 2}];
+  EXPECT_GE(drone1["senders_renumbered"], 1);
+  EXPECT_GE(drone1["challenges_sent"], 1);
+  EXPECT_GE(drone2["challenges_answered"], 1);
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
+  EXPECT_NE(tail(log_, 400).find("drone 2 answered a challenge: its envelope numbers restart at"), std::string::npos);
+}
 #endif
 
 // A recording of one flight's gossip (session A), played on the bus of a later flight with the same

@@ -98,6 +98,7 @@ TEST(LcmMessages, EveryTypeRoundTripsThroughMemq) {
   round_trip(samples::frame(t, 3), "FACT_FRAMES_3");
   round_trip(samples::gossip_packet(t, 3), "FACT_GOSSIP");
   round_trip(samples::gossip_request(t, 3), "FACT_GOSSIP_REQUEST");
+  round_trip(samples::gossip_challenge(t, 3), "FACT_GOSSIP_CHALLENGE");
   round_trip(samples::gossip_summary(t, 3), "FACT_GOSSIP_SUMMARY");
   round_trip(samples::round_packet(t, 3, 2), "FACT_ROUND_PACKET");
   round_trip(samples::swarm_rounds(t, 3), "FACT_SWARM_ROUNDS_3");
@@ -249,6 +250,7 @@ TEST(LcmDecode, EveryPrefixIsRejectedAndMutatedBytesNeverCrash) {
   every_prefix_and_mutation_is_safe(samples::frame(t, 1));
   every_prefix_and_mutation_is_safe(samples::gossip_packet(t, 1));
   every_prefix_and_mutation_is_safe(samples::gossip_request(t, 1));
+  every_prefix_and_mutation_is_safe(samples::gossip_challenge(t, 1));
   every_prefix_and_mutation_is_safe(samples::gossip_summary(t, 1));
   every_prefix_and_mutation_is_safe(samples::round_packet(t, 1, 0));
   every_prefix_and_mutation_is_safe(samples::swarm_rounds(t, 1));

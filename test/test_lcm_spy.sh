@@ -65,12 +65,12 @@ timeout "$(scaled 20)" "$pub" --lcm-url "file://$out/sample.lcmlog?mode=w" --dro
   fail "fact-lcm-publish-sample could not write $out/sample.lcmlog"
 timeout "$(scaled 60)" java -cp "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:$jar" "$src/test/LcmDecodeCheck.java" "$out/sample.lcmlog" >"$out/decode.txt" 2>&1 ||
   fail "the jar did not decode every message"
-for type in app_status_t detections_t fc_state_t frame_t gossip_packet_t gossip_request_t gossip_summary_t \
+for type in app_status_t detections_t fc_state_t frame_t gossip_challenge_t gossip_packet_t gossip_request_t gossip_summary_t \
             odometry_t round_packet_t setpoint_t sim_clock_t swarm_result_t swarm_rounds_t truth_t; do
   grep -q " fact\.$type " "$out/decode.txt" || fail "fact.$type not decoded by the jar"
 done
 grep -q '^FACT_ODOMETRY_3 fact.odometry_t ' "$out/decode.txt" || fail "FACT_ODOMETRY_3 not decoded as fact.odometry_t"
 grep -q '^FACT_RESULT_3 fact.swarm_result_t ' "$out/decode.txt" || fail "FACT_RESULT_3 not decoded as fact.swarm_result_t"
 tail -n1 "$out/decode.txt"
-echo "PASS: lcm-spy found $found types and ran through our traffic; the jar decodes all 14 message types"
+echo "PASS: lcm-spy found $found types and ran through our traffic; the jar decodes all 15 message types"
 exit 0

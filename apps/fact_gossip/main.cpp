@@ -181,6 +181,10 @@ class GossipApp {
         kind = fact::gossip_packet_t::REQUEST;
         break;
     }
+    send_envelope(kind, std::move(payload));
+  }
+
+  void send_envelope(int8_t kind, std::vector<uint8_t> payload) {
     const fact::gossip_packet_t env =
         fact::app::make_envelope(f_.common.drone_id, seq_++, kind, std::move(payload), now_us(), key_);
     const int size = env.getEncodedSize();
@@ -257,8 +261,7 @@ class GossipApp {
                                 " fails authentication (wrong swarm key or altered): dropped");
       return;
     }
-    if (env.kind != fact::gossip_packet_t::ROUND && env.kind != fact::gossip_packet_t::SUMMARY &&
-        env.kind != fact::gossip_packet_t::REQUEST) {
+    if (env.kind < fact::gossip_packet_t::ROUND || env.kind > fact::gossip_packet_t::RESPONSE) {
       reject("bad_kind", "envelope from drone " + std::to_string(env.sender_id) + " of unknown kind " +
                              std::to_string(static_cast<int>(env.kind)));
       return;
@@ -269,13 +272,9 @@ class GossipApp {
         reject("envelopes_refused", "envelope from drone " + std::to_string(env.sender_id) + " refused: " +
                                         fact::gossip::to_string(screen));
       // Duplicates and replays are counted by the gossip (duplicate_envelopes, replayed); replays
-      // are logged too (the first 10, then every 100th): a restarted drone whose clock went back
-      // is refused until its clock passes its old numbers.
-      if (screen == fact::gossip::Screen::replay)
-        fact::app::log_counted(log_, "replayed", gossip_.counters().replayed,
-                               "envelope from drone " + std::to_string(env.sender_id) + " seq " +
-                                   std::to_string(env.seq) + " is older than its replay window: dropped (a drone "
-                                   "restarted with its clock set back is refused until its clock passes its old numbers)");
+      // are logged too (the first 10, then every 100th) and challenge the sender: a drone restarted
+      // with its clock set back answers, and its new numbers are taken from then on.
+      if (screen == fact::gossip::Screen::replay) on_replay(now, env);
       return;
     }
     std::string err;
@@ -295,6 +294,12 @@ class GossipApp {
       if (!(err = fact::app::summary_from_message(m, &s)).empty()) return reject("rejected_invalid_payload", err + from);
       if (s.sender != env.sender_id) return reject("rejected_invalid_payload", "summary of drone " + std::to_string(s.sender) + from);
       err = gossip_.on_summary(now, s);
+    } else if (env.kind == fact::gossip_packet_t::CHALLENGE || env.kind == fact::gossip_packet_t::RESPONSE) {
+      fact::gossip_challenge_t m;
+      if (!(err = fact::app::decode_error(data, size, &m)).empty()) return reject("undecodable", "challenge payload" + from + ": " + err);
+      // A challenge to this drone is answered; an answer that passed the window needed no renumbering.
+      if (env.kind == fact::gossip_packet_t::CHALLENGE && m.peer_id == f_.common.drone_id) answer(env.sender_id, m);
+      return;
     } else {
       fact::gossip_request_t m;
       fact::gossip::Request r;
@@ -308,6 +313,44 @@ class GossipApp {
       status_.note(err + from);
       log_limited(err + from);
     }
+  }
+
+  // An authenticated envelope numbered below its sender's window: the answer to our challenge
+  // (RESPONSE, its numbers restart), or a reason to challenge the sender (logged).
+  void on_replay(int64_t now, const fact::gossip_packet_t& env) {
+    const std::string from = "drone " + std::to_string(env.sender_id);
+    if (env.kind == fact::gossip_packet_t::RESPONSE) {
+      fact::gossip_challenge_t m;
+      const std::string err = fact::app::decode_error(env.payload.data(), env.payload_size, &m);
+      if (!err.empty()) return reject("undecodable", "challenge answer payload from " + from + ": " + err);
+      if (m.peer_id != f_.common.drone_id) return;  // another drone's challenge
+      fact::gossip::Nonce nonce;
+      std::copy(std::begin(m.nonce), std::end(m.nonce), nonce.begin());
+      if (!gossip_.answer_challenge(now, env.sender_id, env.seq, nonce))
+        log_limited("answer from " + from + " seq " + std::to_string(env.seq) + " to no outstanding challenge of ours "
+                    "(late, or a recording)");
+      return;  // the gossip logs the renumbering (take_events)
+    }
+    const fact::gossip::Nonce nonce = fact::app::random_nonce();
+    const bool challenge = gossip_.open_challenge(now, env.sender_id, nonce);
+    fact::app::log_counted(log_, "replayed", gossip_.counters().replayed,
+                           "envelope from " + from + " seq " + std::to_string(env.seq) +
+                               " is older than its replay window: dropped" +
+                               (challenge ? "; challenged " + from + " (restarted with its clock set back?)" : ""));
+    if (challenge)
+      send_envelope(fact::gossip_packet_t::CHALLENGE,
+                    fact::app::encode_bytes(fact::app::challenge_to_message(env.sender_id, nonce, now_us())));
+  }
+
+  // A peer challenged this drone: the nonce goes back in an envelope of this process's numbers.
+  void answer(int challenger, const fact::gossip_challenge_t& m) {
+    fact::gossip::Nonce nonce;
+    std::copy(std::begin(m.nonce), std::end(m.nonce), nonce.begin());
+    send_envelope(fact::gossip_packet_t::RESPONSE,
+                  fact::app::encode_bytes(fact::app::challenge_to_message(challenger, nonce, now_us())));
+    status_.count("challenges_answered");
+    fact::app::log_counted(log_, "challenges_answered", status_.value("challenges_answered"),
+                           "drone " + std::to_string(challenger) + " challenged this drone's envelope numbers: answered");
   }
 
   // A sample the builder refused (it counts it): noted, and logged the first 10 times, then every

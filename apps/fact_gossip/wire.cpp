@@ -180,4 +180,18 @@ std::string request_from_message(const fact::gossip_request_t& m, gossip::Reques
   return "";
 }
 
+fact::gossip_challenge_t challenge_to_message(int peer, const gossip::Nonce& nonce, int64_t utime) {
+  fact::gossip_challenge_t m;
+  m.utime = utime;
+  m.peer_id = peer;
+  std::copy(nonce.begin(), nonce.end(), m.nonce);
+  return m;
+}
+
+gossip::Nonce random_nonce() {
+  gossip::Nonce n;
+  randombytes_buf(n.data(), n.size());
+  return n;
+}
+
 }  // namespace fact::app

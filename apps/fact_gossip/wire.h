@@ -2,9 +2,13 @@
 // and the conversions between lib/'s gossip data (fact/gossip.h) and the LCM messages.
 //
 // Envelope: payload = the LCM encoding of a round_packet_t (kind ROUND = 1), gossip_summary_t
-// (SUMMARY = 2) or gossip_request_t (REQUEST = 3). seq: per sender, +1 per packet, starting at
-// the sender's start time in µs, so a restarted sender's numbers exceed the old ones and receivers
-// (which remember a window of numbers per sender) do not take its new packets for replays.
+// (SUMMARY = 2), gossip_request_t (REQUEST = 3) or gossip_challenge_t (CHALLENGE = 4, RESPONSE =
+// 5). seq: per sender, +1 per packet, starting at the sender's start time in µs, so a restarted
+// sender's numbers exceed the old ones and receivers (which remember a window of numbers per
+// sender) do not take its new packets for replays. A sender restarted with its clock set back
+// numbers below its old ones: a receiver then sends it a CHALLENGE (a random nonce, peer_id = the
+// sender), the sender answers with a RESPONSE carrying the nonce (peer_id = the challenger), and
+// the challenger takes the sender's new numbers (fact::gossip::Gossip::answer_challenge).
 // mac = crypto_auth (libsodium, HMAC-SHA512-256, 32 bytes) with the 32-byte swarm key over
 //   kind (1 byte) | sender_id (4 bytes, big-endian two's complement) | seq (8 bytes, big-endian)
 //   | payload (payload_size bytes)
@@ -22,6 +26,7 @@
 #pragma once
 
 #include "fact/gossip.h"
+#include "fact/gossip_challenge_t.hpp"
 #include "fact/gossip_packet_t.hpp"
 #include "fact/gossip_request_t.hpp"
 #include "fact/gossip_summary_t.hpp"
@@ -75,5 +80,9 @@ fact::gossip_summary_t summary_to_message(const gossip::Summary& s, int64_t utim
 std::string summary_from_message(const fact::gossip_summary_t& m, gossip::Summary* out);
 fact::gossip_request_t request_to_message(const gossip::Request& r, int64_t utime);
 std::string request_from_message(const fact::gossip_request_t& m, gossip::Request* out);
+// A challenge or its response (peer: see fact_gossip_challenge_t.lcm).
+fact::gossip_challenge_t challenge_to_message(int peer, const gossip::Nonce& nonce, int64_t utime);
+// A fresh random nonce (libsodium; init_crypto first).
+gossip::Nonce random_nonce();
 
 }  // namespace fact::app

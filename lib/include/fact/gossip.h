@@ -34,6 +34,14 @@
 //      number ≥ max_rounds (memory cap), a round number ≥ held + future_window (far in the future),
 //      an envelope sequence number already seen (duplicate) or older than the replay window
 //      (replay).
+//    - Renumbered senders: a sender's numbers start at its start time (µs), so a sender restarted
+//      with its clock set back numbers its envelopes below its old ones, and they screen as
+//      replays. The receiver then challenges it (open_challenge: a random nonce, at most one
+//      outstanding per sender, renewed after challenge_timeout); the sender answers with the nonce
+//      in an envelope of its new numbers, which a recording cannot forge, and answer_challenge
+//      restarts the sender's window at that number. The previous run's numbers above the new
+//      window, up to the highest seen, stay refused until the new numbers pass them, so replaying
+//      the old run after the restart does not lock the sender out again.
 //    - Bounded memory: at most max_origins drone ids and max_rounds rounds per origin (rounds
 //      0 … max_rounds − 1: the session's first rounds are kept, later ones refused and counted,
 //      because the estimator works from the first rounds and a restarted peer must find them
@@ -58,6 +66,7 @@
 #include "fact/rounds.h"
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -138,6 +147,7 @@ struct Options {
   int max_observations = 64;      // observations per packet
   int max_request_rounds = 16;    // rounds per request
   int replay_window = 256;        // envelope sequence numbers remembered per sender
+  int64_t challenge_timeout_us = 2000000;   // a challenge's answer is taken this long (µs)
 };
 
 // "" if usable, else which option and why.
@@ -166,6 +176,9 @@ struct Counters {
   int64_t summaries_sent = 0;
   int64_t requests_sent = 0;
   int64_t members_silenced = 0;     // live → silent transitions
+  int64_t challenges_sent = 0;      // challenges to senders whose numbers went back
+  int64_t senders_renumbered = 0;   // such a sender answered: its window restarts at its new numbers
+  int64_t challenge_answers_refused = 0;  // an answer to no outstanding challenge, or a wrong or late nonce
   // (name, value) in a fixed order, e.g. ("duplicate_rounds", 3).
   std::vector<std::pair<std::string, int64_t>> list() const;
 };
@@ -192,6 +205,9 @@ struct MemberInfo {
 enum class Screen { accept, self, unknown_id, table_full, duplicate, replay };
 const char* to_string(Screen s);
 
+// A challenge's random nonce (the app draws it from a cryptographic source).
+using Nonce = std::array<uint8_t, 16>;
+
 class Gossip {
  public:
   // `now`: start time (µs). Options must pass check_options (else every input is refused).
@@ -203,6 +219,14 @@ class Gossip {
   // sequence (duplicate within the replay window, or older than it). Only accepted envelopes
   // should be passed on. Marks the sender heard.
   Screen screen_envelope(int64_t now, int sender, int64_t seq);
+  // After Screen::replay from `sender`: true when a challenge carrying `nonce` should go to it now
+  // (it was heard before, and no challenge to it is outstanding: none, or the last one older than
+  // challenge_timeout). The nonce is then the outstanding one.
+  bool open_challenge(int64_t now, int sender, const Nonce& nonce);
+  // An authenticated answer from `sender` in its envelope numbered `seq`, carrying `nonce`: true
+  // when it is the outstanding challenge's nonce, within challenge_timeout; the sender's window
+  // then restarts at seq (seq counts as seen, the sender as heard). False (counted) otherwise.
+  bool answer_challenge(int64_t now, int sender, int64_t seq, const Nonce& nonce);
 
   // Messages from peers (their envelope accepted). Each returns "" or the reason it was refused.
   std::string on_round(int64_t now, int sender, const Packet& p);
@@ -253,6 +277,11 @@ class Gossip {
     bool seq_init = false;
     int64_t seq_high = 0;
     std::vector<uint64_t> seq_seen;           // bitmap of seq_high − replay_window + 1 … seq_high
+    bool stale = false;                       // renumbered: numbers in (seq_high + replay_window,
+    int64_t stale_high = 0;                   //   stale_high] are the previous run's, refused
+    bool challenged = false;                  // a challenge is outstanding:
+    Nonce challenge{};                        //   its nonce
+    int64_t challenged_at = 0;                //   and when it was sent (µs)
     std::map<int, SummaryEntry> summary;      // its last summary, by origin
     int64_t last_request = 0;                 // our last request for this origin's rounds
     bool requested = false;
