@@ -11,6 +11,7 @@
 //     not offboard) at 5 Hz to the bridge's port; everything the bridge sends is appended to
 //     --capture FILE.
 // Runs for --duration seconds. Exit 0, or 1 when LCM or the socket fails.
+#include "common/app.h"
 #include "fact/mavlink.h"
 #include "fact/odometry_t.hpp"
 #include "fact/setpoint_t.hpp"
@@ -128,7 +129,7 @@ int main(int argc, char** argv) {
     }
     if (now >= next_sp) {
       fact::setpoint_t s = fixed_setpoint(drone_id);
-      s.utime = now;
+      s.utime = fact::app::now_us();  // stamped on the wall clock, as the planner does (the bridge checks it)
       if (sp_count == 10) s.position[1] = std::numeric_limits<double>::quiet_NaN();  // must be rejected
       if (sp_count == 11) s.position[2] = 80;                                           // outside the geofence
       if (sp_count == 12) s.drone_id = drone_id + 1;                                    // another drone

@@ -35,6 +35,7 @@
 #include "fact/fc_state_t.hpp"
 #include "fact/mavlink.h"
 #include "fact/mavlink_frames.h"
+#include "fact/odometry_t.hpp"
 #include "fact/setpoint_t.hpp"
 #include "app_process.h"
 #include "private_netns.h"
@@ -157,8 +158,13 @@ class LcmSide {
   bool have_status = false;
 };
 
+// Setpoints are stamped on the wall clock, as the planner stamps them, moved by this much when a
+// test steps the bridge's clock (a planner on the same computer sees the same step).
+int64_t g_stamp_shift_us = 0;
+
 fact::setpoint_t setpoint(double x, double y, double z, double yaw = 0.5) {
   fact::setpoint_t s{};
+  s.utime = fact::app::now_us() + g_stamp_shift_us;
   s.drone_id = 0;
   s.position[0] = x;
   s.position[1] = y;
@@ -284,6 +290,7 @@ TEST(FcBridge, WallClockStepNeitherStopsTheStreamNorKeepsAStaleSetpoint) {
   };
   run_for(0.6, fc, side, every);
   std::ofstream(shift.path()) << "-3600\n";
+  g_stamp_shift_us = -3600000000LL;
   const double stepped = now_s();
   run_for(0.8, fc, side, every);
   EXPECT_GE(fc.count(84, stepped + 0.2, now_s()), 10) << "streaming stopped at the step";
@@ -292,8 +299,147 @@ TEST(FcBridge, WallClockStepNeitherStopsTheStreamNorKeepsAStaleSetpoint) {
   run_for(1.0, fc, side, every);
   EXPECT_EQ(fc.count(84, died + 0.3 + 0.12, now_s()), 0) << "a dead planner's setpoint streams on";
   EXPECT_EQ(bridge.stop(), 0);
+  g_stamp_shift_us = 0;
 }
 #endif
+
+// Setpoints stamped an hour ago (a log replayed onto the drone's bus) or an hour ahead never reach
+// the wire; fresh ones stream (review, session 32: any stamp streamed).
+TEST(FcBridge, SetpointsStampedFarFromTheClockAreRefused) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15151, 15150);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15150, 15151, {}));
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
+  double next_hb = 0, next_sp = 0;
+  int64_t stamp_shift = -3600000000LL;
+  run_for(1.0, fc, side, [&](double t) {
+    if (t >= next_hb) fc.heartbeat(), next_hb = t + 0.1;
+    if (t < next_sp) return;
+    next_sp = t + 0.05;
+    fact::setpoint_t s = setpoint(1, 2, 3);
+    s.utime += stamp_shift;
+    stamp_shift = -stamp_shift;  // an hour old, an hour ahead, …
+    publish_sp(side, s);
+  });
+  EXPECT_EQ(fc.count(84), 0) << "a setpoint stamped an hour off was streamed";
+  const double fresh = now_s();
+  next_sp = 0;
+  run_for(0.6, fc, side, [&](double t) {
+    if (t >= next_hb) fc.heartbeat(), next_hb = t + 0.1;
+    if (t >= next_sp) publish_sp(side, setpoint(1, 2, 3)), next_sp = t + 0.05;
+  });
+  EXPECT_GE(fc.count(84, fresh, now_s()), 5);
+  EXPECT_EQ(bridge.stop(), 0);
+  side.pump();
+  EXPECT_GE(side.counter("rejected_stale"), 15);
+  const std::string log = bridge.log();
+  EXPECT_NE(log.find("is 3600 s old"), std::string::npos) << log;
+  EXPECT_NE(log.find("is 3600 s ahead of this clock"), std::string::npos) << log;
+}
+
+// With --arm --offboard the bridge asks until the FC shows armed + OFFBOARD, and then never again:
+// a pilot who switches to another mode or disarms is not overridden (review, session 32: the tries
+// left were spent re-requesting OFFBOARD and re-arming after an RC takeover).
+TEST(FcBridge, ArmAndOffboardRequestsEndOnceTheStateIsReached) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15153, 15152);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15152, 15153, {"--arm", "--offboard"}));
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
+  uint8_t base = mav::kModeFlagCustomModeEnabled;
+  uint32_t custom = 0x00030000;  // POSCTL, disarmed
+  double next_hb = 0, next_sp = 0;
+  const auto every = [&](double t) {
+    if (t >= next_hb) fc.heartbeat(base, custom), next_hb = t + 0.1;
+    if (t >= next_sp) publish_sp(side, setpoint(1, 2, 3)), next_sp = t + 0.05;
+  };
+  run_for(2.4, fc, side, every);  // streaming 1 s, then requests once a second
+  EXPECT_GE(fc.count(76), 2) << "no arm / offboard request";
+  base = mav::kModeFlagCustomModeEnabled | mav::kModeFlagSafetyArmed;
+  custom = static_cast<uint32_t>(mav::kPx4MainModeOffboard) << 16;
+  run_for(0.5, fc, side, every);
+  base = mav::kModeFlagCustomModeEnabled;  // the pilot takes over: POSCTL, then disarms
+  custom = 0x00030000;
+  const double taken_over = now_s();
+  run_for(2.5, fc, side, every);
+  EXPECT_EQ(fc.count(76, taken_over, now_s()), 0) << "the bridge overrode the pilot";
+  EXPECT_EQ(bridge.stop(), 0);
+  const std::string log = bridge.log();
+  EXPECT_NE(log.find("reports the requested state (armed / offboard): no more requests"), std::string::npos) << log;
+  EXPECT_NE(log.find("left the requested state (disarmed, not offboard): not requested again"), std::string::npos) << log;
+}
+
+// MAVLink over UDP: a false start (a header claiming 255 bytes) in one datagram must not hold back
+// the heartbeats of the next ones (review, session 32: the FC was "lost" for 13 s).
+TEST(FcBridge, AFalseStartInADatagramDoesNotHoldBackTheNextOnes) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15155, 15154);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15154, 15155, {"--heartbeat-timeout", "0.5"}));
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
+  double next_hb = 0, next_sp = 0;
+  bool sent_false_start = false;
+  run_for(1.6, fc, side, [&](double t) {
+    if (t >= next_sp) publish_sp(side, setpoint(1, 2, 3)), next_sp = t + 0.05;
+    if (t < next_hb) return;
+    next_hb = t + 0.1;
+    if (!sent_false_start && fc.count(84) > 0) {
+      fc.send_bytes({mav::kStx, 0xFF, 0, 0, 0, 1, 1, 0x99, 0x99, 0x0A});
+      sent_false_start = true;
+    }
+    fc.heartbeat();
+  });
+  EXPECT_TRUE(sent_false_start);
+  EXPECT_EQ(bridge.stop(), 0);
+  side.pump();
+  EXPECT_GE(side.counter("fc_heartbeats"), 12);
+  EXPECT_GE(side.counter("mavlink_truncated"), 1);
+  const std::string log = bridge.log();
+  EXPECT_EQ(log.find("heartbeat lost"), std::string::npos) << log;
+}
+
+// One duplicated or reordered odometry datagram is dropped (rejected_out_of_order), not forwarded
+// as a VIO reset; a stream that starts again (seq 0) is a reset (reset_counter 1).
+TEST(FcBridge, ReorderedOdometryIsDroppedAndARestartIsAReset) {
+  ASSERT_TRUE(only_loopback());
+  FakeFc fc(15157, 15156);
+  ASSERT_TRUE(fc.ok());
+  LcmSide side;
+  Process bridge(bridge_args(15156, 15157, {}));
+  ASSERT_TRUE(bridge_up(side)) << bridge.log();
+  const auto odometry = [](int64_t seq, int64_t utime) {
+    fact::odometry_t o{};
+    o.utime = utime;
+    o.drone_id = 0;
+    o.seq = seq;
+    o.position[2] = 1;
+    return o;
+  };
+  const int64_t t0 = 1000000000;
+  std::vector<fact::odometry_t> sent;
+  for (int64_t k = 10; k <= 14; ++k) sent.push_back(odometry(k, t0 + 10000 * k));
+  sent.push_back(odometry(12, t0 + 120000));  // a reordered duplicate
+  sent.push_back(odometry(15, t0 + 150000));
+  sent.push_back(odometry(0, t0 - 5000000));  // the relay restarted
+  size_t next = 0;
+  run_for(1.0, fc, side, [&](double) {
+    if (next < sent.size()) side.lcm.publish("FACT_ODOMETRY_0", &sent[next++]);
+  });
+  EXPECT_EQ(bridge.stop(), 0);
+  side.pump();
+  std::vector<mav::Odometry> got;
+  for (const auto& r : fc.frames)
+    if (mav::Odometry m; mav::decode(r.frame, &m)) got.push_back(m);
+  ASSERT_EQ(got.size(), 7u);
+  for (size_t i = 0; i + 1 < got.size(); ++i) EXPECT_EQ(got[i].reset_counter, 0) << i;
+  EXPECT_EQ(got.back().reset_counter, 1);
+  EXPECT_EQ(got[5].time_usec, static_cast<uint64_t>(t0 + 150000));
+  EXPECT_EQ(side.counter("rejected_out_of_order"), 1);
+}
 
 TEST(FcBridge, BadSetpointsNeverReachTheWireAndAreCounted) {
   ASSERT_TRUE(only_loopback());

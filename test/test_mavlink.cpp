@@ -471,6 +471,54 @@ TEST(MavlinkParser, IncompleteFrameWaits) {
   EXPECT_EQ(c.frames.size(), 1u);
 }
 
+// Over UDP a datagram holds whole frames. A false start (here a SET_POSITION_TARGET header claiming
+// 255 bytes) or a frame cut short in one datagram is settled at its end: the heartbeats behind it
+// in the same datagram and in the next are taken at once (before, the parser waited for the 255
+// claimed bytes across datagrams: an FC sending only heartbeats was "lost" for 13 s; review,
+// session 32). A cut heartbeat at a datagram's end is rejected, not completed by the next one.
+TEST(MavlinkParser, EndOfDatagramSettlesFalseStartsAndCutFrames) {
+  mav::Encoder enc({1, 1});
+  std::vector<uint8_t> first = {mav::kStx, 255, 0, 0, 0, 1, 1, 84, 0, 0};  // msgid 84, claims 255 bytes
+  for (int i = 0; i < 2; ++i) {
+    const auto hb = enc.encode(mav::Heartbeat{});
+    first.insert(first.end(), hb.begin(), hb.end());
+  }
+  const auto cut = enc.encode(mav::Heartbeat{});
+  first.insert(first.end(), cut.begin(), cut.end() - 3);
+  const auto second = enc.encode(mav::Heartbeat{});
+  mav::Parser p;
+  Collected c;
+  auto on_frame = [&](const mav::Frame& f) { c.frames.push_back(f); };
+  auto on_reject = [&](const mav::Rejection& r) { c.rejections.push_back(r); };
+  p.feed(first.data(), first.size(), on_frame, on_reject);
+  EXPECT_TRUE(c.frames.empty());  // held behind the false start until the datagram ends
+  p.end_of_datagram(on_frame, on_reject);
+  ASSERT_EQ(c.frames.size(), 2u);
+  EXPECT_EQ(c.frames[0].seq, 0);
+  EXPECT_EQ(c.frames[1].seq, 1);
+  EXPECT_EQ(p.buffered(), 0u);
+  ASSERT_GE(c.rejections.size(), 2u);
+  EXPECT_EQ(c.rejections.front().reason, mav::Reject::truncated);
+  EXPECT_EQ(c.rejections.front().msgid, 84u);
+  EXPECT_NE(c.rejections.front().detail.find("255-byte payload"), std::string::npos) << c.rejections.front().detail;
+  EXPECT_STREQ(mav::to_string(mav::Reject::truncated), "truncated");
+  p.feed(second.data(), second.size(), on_frame, on_reject);
+  p.end_of_datagram(on_frame, on_reject);
+  ASSERT_EQ(c.frames.size(), 3u);
+  EXPECT_EQ(c.frames[2].seq, 3);
+  // An unverifiable frame that fills the rest of a datagram is skipped whole (nothing follows it).
+  std::array<uint8_t, 31> payload{};
+  const auto unknown = mav::frame_bytes(1, 124, payload.data(), payload.size(), 0, {1, 1});
+  Collected u;
+  p.feed(unknown.data(), unknown.size(), [&](const mav::Frame& f) { u.frames.push_back(f); },
+         [&](const mav::Rejection& r) { u.rejections.push_back(r); });
+  EXPECT_TRUE(u.rejections.empty());  // waits for the byte after it
+  p.end_of_datagram([&](const mav::Frame& f) { u.frames.push_back(f); }, [&](const mav::Rejection& r) { u.rejections.push_back(r); });
+  ASSERT_EQ(u.rejections.size(), 1u);
+  EXPECT_EQ(u.rejections[0].reason, mav::Reject::unknown_id);
+  EXPECT_EQ(p.buffered(), 0u);
+}
+
 // ------------------------------------------------------------------------------- FLU <-> NED
 
 TEST(MavlinkFrames, PointNorthEastUp) {

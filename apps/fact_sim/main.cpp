@@ -308,7 +308,7 @@ class Simulator {
                           "fc_rejected_range", "fc_not_for_us", "fc_commands", "fc_command_denied", "fc_odometry",
                           "fc_peer_heartbeats", "fc_failsafe", "fc_heartbeats_sent", "fc_telemetry_sent",
                           "fc_mavlink_bad_crc", "fc_mavlink_bad_length", "fc_mavlink_unknown_id",
-                          "fc_mavlink_signed_frame", "fc_mavlink_unknown_flags", "fc_foreign_peer", "fc_send_failed"})
+                          "fc_mavlink_signed_frame", "fc_mavlink_unknown_flags", "fc_mavlink_truncated", "fc_foreign_peer", "fc_send_failed"})
       status_->count(c, 0);
     std::string ports;
     for (Drone& d : drones_) {

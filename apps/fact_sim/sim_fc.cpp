@@ -72,9 +72,10 @@ bool SimFc::for_us(uint8_t system, uint8_t component) const {
 }
 
 void SimFc::on_bytes(const uint8_t* data, std::size_t n, const sim::SimDrone& drone, int64_t t) {
-  parser_.feed(
-      data, n, [&](const mav::Frame& f) { on_frame(f, drone, t); },
-      [&](const mav::Rejection& r) { reject(std::string("fc_mavlink_") + mav::to_string(r.reason), r.detail); });
+  const auto on_frame_here = [&](const mav::Frame& f) { on_frame(f, drone, t); };
+  const auto on_reject = [&](const mav::Rejection& r) { reject(std::string("fc_mavlink_") + mav::to_string(r.reason), r.detail); };
+  parser_.feed(data, n, on_frame_here, on_reject);
+  parser_.end_of_datagram(on_frame_here, on_reject);  // (n is one UDP datagram)
 }
 
 void SimFc::on_frame(const mav::Frame& f, const sim::SimDrone& drone, int64_t t) {

@@ -88,8 +88,9 @@ Bridge::Bridge(const BridgeOptions& o, Send send, PublishState publish, app::Sta
       stream_period_us_(static_cast<int64_t>(std::llround(1e6 / o.stream_rate_hz))) {
   for (const char* name : {"setpoints_received", "setpoints_sent", "odometry_received", "odometry_sent",
                            "heartbeats_sent", "fc_heartbeats", "commands_sent", "undecodable", "rejected_nan",
-                           "rejected_range", "rejected_geofence", "rejected_drone_id", "mavlink_bad_crc", "mavlink_bad_length",
-                           "mavlink_unknown_id", "mavlink_signed_frame", "mavlink_unknown_flags", "mavlink_non_finite",
+                           "rejected_range", "rejected_geofence", "rejected_drone_id", "rejected_stale",
+                           "rejected_out_of_order", "mavlink_bad_crc", "mavlink_bad_length",
+                           "mavlink_unknown_id", "mavlink_signed_frame", "mavlink_unknown_flags", "mavlink_truncated", "mavlink_non_finite",
                            "send_failed"})
     status_->count(name, 0);
   status_->set_state("no setpoint yet");
@@ -123,11 +124,18 @@ std::string Bridge::check_setpoint(const fact::setpoint_t& sp, std::string* coun
   return "";
 }
 
-void Bridge::on_setpoint(const fact::setpoint_t& sp, const std::string& channel, int64_t now) {
+void Bridge::on_setpoint(const fact::setpoint_t& sp, const std::string& channel, int64_t now, int64_t stamp_clock) {
   if (start_us_ < 0) start_us_ = now;
   status_->count("setpoints_received");
   std::string counter;
-  const std::string why = check_setpoint(sp, &counter);
+  std::string why = check_setpoint(sp, &counter);
+  const int64_t skew = stamp_clock - sp.utime;  // > 0: stamped in the past
+  if (why.empty() && o_.max_stamp_skew_us > 0 && (skew > o_.max_stamp_skew_us || skew < -o_.max_stamp_skew_us)) {
+    counter = "rejected_stale";
+    why = "setpoint utime = " + std::to_string(sp.utime) + " is " + num(std::abs(skew) * 1e-6) + " s " +
+          (skew > 0 ? "old" : "ahead of this clock") + " (at most " + num(o_.max_stamp_skew_us * 1e-6) +
+          " s: a replayed log or a stuck publisher)";
+  }
   if (!why.empty()) {
     reject(counter, why + " on " + channel);
     return;
@@ -151,14 +159,24 @@ void Bridge::on_odometry(const fact::odometry_t& od, const std::string& channel,
     reject(counter, "odometry " + bad + " on " + channel);
     return;
   }
-  // A sequence number that does not move forward means the VIO restarted: a reset for PX4's EKF2.
+  // A stream that starts again (fact::app::odometry_restarted: seq 0, a jump back beyond
+  // reordering, or a time 1 s earlier) is a VIO restart: a reset for PX4's EKF2. Any other sample
+  // that does not move forward is a duplicated or reordered datagram: not forwarded (review,
+  // session 32: one reordered datagram reset EKF2's VIO fusion).
   if (have_odometry_seq_ && od.seq <= last_odometry_seq_) {
+    if (!app::odometry_restarted(last_odometry_seq_, last_odometry_utime_, od.seq, od.utime)) {
+      reject("rejected_out_of_order", "odometry seq " + std::to_string(od.seq) + " after " +
+                                          std::to_string(last_odometry_seq_) + " on " + channel +
+                                          ": a duplicated or reordered sample, not forwarded");
+      return;
+    }
     ++reset_counter_;
     log_.event("odometry seq " + std::to_string(od.seq) + " after " + std::to_string(last_odometry_seq_) +
                ": VIO reset, reset_counter = " + std::to_string(reset_counter_));
   }
   have_odometry_seq_ = true;
   last_odometry_seq_ = od.seq;
+  last_odometry_utime_ = od.utime;
 
   const mav::Euler att{od.roll, od.pitch, od.yaw};
   const mav::Quat q = mav::attitude_quat_ned_frd(att);
@@ -189,11 +207,14 @@ void Bridge::on_odometry(const fact::odometry_t& od, const std::string& channel,
 
 // ------------------------------------------------------------------------------- FC input
 
-void Bridge::on_fc_bytes(const uint8_t* data, std::size_t n, int64_t now) {
+void Bridge::on_fc_bytes(const uint8_t* data, std::size_t n, int64_t now, bool datagram) {
   if (start_us_ < 0) start_us_ = now;
-  parser_.feed(
-      data, n, [&](const mav::Frame& f) { on_frame(f, now); },
-      [&](const mav::Rejection& r) { reject(std::string("mavlink_") + mav::to_string(r.reason), "MAVLink from the FC: " + r.detail); });
+  const auto on_frame_now = [&](const mav::Frame& f) { on_frame(f, now); };
+  const auto on_reject = [&](const mav::Rejection& r) {
+    reject(std::string("mavlink_") + mav::to_string(r.reason), "MAVLink from the FC: " + r.detail);
+  };
+  parser_.feed(data, n, on_frame_now, on_reject);
+  if (datagram) parser_.end_of_datagram(on_frame_now, on_reject);
 }
 
 void Bridge::on_frame(const mav::Frame& f, int64_t now) {
@@ -333,12 +354,20 @@ void Bridge::send_commands(int64_t now) {
   const bool offboard = (fc_heartbeat_.base_mode & mav::kModeFlagCustomModeEnabled) &&
                         mav::px4_main_mode(fc_heartbeat_.custom_mode) == mav::kPx4MainModeOffboard;
   const bool need_mode = o_.offboard && !offboard, need_arm = o_.arm && !armed;
-  if (!need_mode && !need_arm) {
-    if (!command_done_logged_) log_.event("flight controller reports the requested state (armed / offboard)");
-    command_done_logged_ = true;
+  if (commands_done_) {
+    // Requests end for good once the state was reached: a pilot who takes over (another mode, or
+    // disarms) is not overridden (review, session 32: the tries left were spent re-arming).
+    if ((need_mode || need_arm) && !left_state_logged_)
+      log_.event(std::string("flight controller left the requested state (") + (need_arm ? "disarmed" : "armed") + ", " +
+                 (need_mode ? "not offboard" : "offboard") + "): not requested again");
+    left_state_logged_ = need_mode || need_arm;
     return;
   }
-  command_done_logged_ = false;
+  if (!need_mode && !need_arm) {
+    log_.event("flight controller reports the requested state (armed / offboard): no more requests");
+    commands_done_ = true;
+    return;
+  }
   if (command_rounds_ >= o_.command_tries || (command_rounds_ > 0 && now - last_command_at_ < o_.command_interval_us))
     return;
   if (need_mode) send_command(mav::kCmdDoSetMode, 1.0f, static_cast<float>(mav::kPx4MainModeOffboard));

@@ -35,6 +35,10 @@ struct BridgeOptions {
   uint8_t target_component = 1;         // and compid (MAV_COMP_ID_AUTOPILOT1)
   double stream_rate_hz = 50;           // setpoint stream rate (PX4 needs > 2 Hz)
   int64_t setpoint_timeout_us = 500000; // a setpoint older than this stops the stream
+  // > 0: a setpoint stamped (utime) further than this from the app's clock when it arrives is
+  // refused (rejected_stale): a replayed log's or a stuck publisher's. 0: not checked (fact-fc-bridge
+  // sets setpoint_timeout_us, or 0 with --sim-clock, where the stamps are simulated time).
+  int64_t max_stamp_skew_us = 0;
   int64_t heartbeat_timeout_us = 3000000;  // an FC heartbeat older than this stops the stream
   Geofence fence;
   bool arm = false;                     // send MAV_CMD_COMPONENT_ARM_DISARM(1)
@@ -55,9 +59,11 @@ class Bridge {
 
   Bridge(const BridgeOptions& o, Send send, PublishState publish, app::Status* status, const app::Log& log);
 
-  void on_setpoint(const fact::setpoint_t& sp, const std::string& channel, int64_t now);
+  // stamp_clock: the app's clock (µs, fact::app::now_us) that setpoints are stamped on.
+  void on_setpoint(const fact::setpoint_t& sp, const std::string& channel, int64_t now, int64_t stamp_clock);
   void on_odometry(const fact::odometry_t& od, const std::string& channel, int64_t now);
-  void on_fc_bytes(const uint8_t* data, std::size_t n, int64_t now);
+  // `datagram`: the bytes are one whole UDP datagram (MAVLink over UDP never splits a frame).
+  void on_fc_bytes(const uint8_t* data, std::size_t n, int64_t now, bool datagram);
   // Heartbeat (1 Hz), the setpoint stream, arm / offboard commands, fc_state. Call often.
   void tick(int64_t now);
   // µs until tick() has something to do (>= 0).
@@ -103,6 +109,7 @@ class Bridge {
   // Odometry.
   bool have_odometry_seq_ = false;
   int64_t last_odometry_seq_ = 0;
+  int64_t last_odometry_utime_ = 0;
   uint8_t reset_counter_ = 0;
 
   // Flight controller.
@@ -117,7 +124,8 @@ class Bridge {
   // Commands.
   int command_rounds_ = 0;
   int64_t last_command_at_ = 0;
-  bool command_done_logged_ = false;
+  bool commands_done_ = false;          // the FC showed the requested state once: no more requests
+  bool left_state_logged_ = false;      // ... and it left that state since (a pilot's decision)
 
   int64_t next_heartbeat_at_ = 0;
   int64_t next_state_at_ = 0;

@@ -57,6 +57,7 @@ class UdpLink : public Link {
     return -1;
   }
   std::string take_ignored() override { return std::exchange(ignored_, std::string()); }
+  bool datagrams() const override { return true; }
   std::string describe() const override { return "udp " + text_; }
 
  private:

@@ -33,6 +33,8 @@ class Link {
   // What the last receive() dropped instead of returning ("" when nothing), then "": the UDP link
   // takes datagrams only from the flight controller's address and port.
   virtual std::string take_ignored() { return ""; }
+  // Whether receive() returns whole datagrams (UDP) rather than a byte stream (serial).
+  virtual bool datagrams() const { return false; }
   virtual std::string describe() const = 0;
 };
 

@@ -162,6 +162,9 @@ fact::bridge::BridgeOptions check(Options& o) {
   b.target_component = static_cast<uint8_t>(o.target_component);
   b.stream_rate_hz = o.stream_rate;
   b.setpoint_timeout_us = std::llround(o.setpoint_timeout * 1e6);
+  // Setpoints stamped further from this clock than the timeout are refused, except in simulated
+  // time (there a stamp's lag is real latency times the simulation's rate).
+  b.max_stamp_skew_us = o.common.sim_clock ? 0 : b.setpoint_timeout_us;
   b.heartbeat_timeout_us = std::llround(o.heartbeat_timeout * 1e6);
   b.fence = parse_geofence(o.geofence);
   b.arm = o.arm;
@@ -177,7 +180,8 @@ class Inputs {
   Inputs(fact::bridge::Bridge& b, fact::app::Status& s, const fact::app::Log& l) : bridge_(b), status_(s), log_(l) {}
   void on_setpoint(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     fact::setpoint_t m;
-    if (fact::app::decode(rbuf, channel, &m, &status_, log_)) bridge_.on_setpoint(m, channel, fact::app::monotonic_us());
+    if (fact::app::decode(rbuf, channel, &m, &status_, log_))
+      bridge_.on_setpoint(m, channel, fact::app::monotonic_us(), fact::app::now_us());
   }
   void on_odometry(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     fact::odometry_t m;
@@ -193,7 +197,7 @@ class Inputs {
 // Poll loop over the LCM socket and the link until a stop request or a failure (returns 1).
 int run(lcm::LCM& lcm, fact::bridge::Link& link, fact::bridge::Bridge& bridge, fact::app::Status& status,
         const fact::app::Log& log) {
-  std::vector<uint8_t> buf(4096);
+  std::vector<uint8_t> buf(65536);  // a whole UDP datagram (recvfrom drops what does not fit)
   while (!fact::app::stop_requested()) {
     // The bridge's timeouts and schedule run on the monotonic clock; the status stamps wall time.
     const int64_t now = fact::app::monotonic_us();
@@ -220,7 +224,7 @@ int run(lcm::LCM& lcm, fact::bridge::Link& link, fact::bridge::Bridge& bridge, f
         log.event("error: " + error);
         return 1;
       }
-      if (got > 0) bridge.on_fc_bytes(buf.data(), static_cast<std::size_t>(got), fact::app::monotonic_us());
+      if (got > 0) bridge.on_fc_bytes(buf.data(), static_cast<std::size_t>(got), fact::app::monotonic_us(), link.datagrams());
       if (const std::string ignored = link.take_ignored(); !ignored.empty())
         fact::app::count_and_log(status, log, "foreign_datagrams", ignored);
     }

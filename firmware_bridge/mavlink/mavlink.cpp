@@ -250,6 +250,7 @@ const char* to_string(Reject r) {
     case Reject::unknown_id: return "unknown_id";
     case Reject::signed_frame: return "signed_frame";
     case Reject::unknown_flags: return "unknown_flags";
+    case Reject::truncated: return "truncated";
   }
   return "unknown";
 }
@@ -283,7 +284,28 @@ void Parser::reject(Reject r, uint32_t msgid, std::string detail, std::size_t sk
 }
 
 std::size_t Parser::unverified_skip(std::size_t total) const {
+  if (start_ + total == buffer_.size()) return total;  // at the end of a datagram: nothing follows
   return buffer_[start_ + total] == kStx ? total : 1;  // (take_one holds total + 1 bytes)
+}
+
+void Parser::end_of_datagram(const FrameHandler& on_frame, const RejectHandler& on_reject) {
+  at_end_ = true;
+  while (buffered() > 0) {
+    if (take_one(on_frame, on_reject)) continue;
+    const std::size_t left = buffered();
+    if (left == 0) break;  // only garbage was left (skipped)
+    const uint8_t* b = buffer_.data() + start_;
+    const uint32_t msgid = left >= kHeaderLength ? (b[7] | (b[8] << 8) | (static_cast<uint32_t>(b[9]) << 16)) : 0;
+    const std::string claim = left >= 2 ? ", its header claims a " + std::to_string(b[1]) + "-byte payload" : "";
+    Rejection j{Reject::truncated, msgid, static_cast<uint8_t>(left > 5 ? b[5] : 0), static_cast<uint8_t>(left > 6 ? b[6] : 0),
+                "frame cut short by the end of its datagram: " + std::to_string(left) + " byte(s) left" + claim};
+    ++rejected_;
+    ++start_;
+    if (on_reject) on_reject(j);
+  }
+  at_end_ = false;
+  buffer_.clear();
+  start_ = 0;
 }
 
 bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reject) {
@@ -309,7 +331,7 @@ bool Parser::take_one(const FrameHandler& on_frame, const RejectHandler& on_reje
   // A frame that cannot be verified waits for the byte after it (unverified_skip reads it): the
   // bytes held may end where a false start's claimed length does, one byte at a time on a serial
   // line (review, session 30).
-  if ((is_signed || m == nullptr) && available < total + 1) return false;
+  if ((is_signed || m == nullptr) && available < total + 1 && !at_end_) return false;
   if (is_signed) {
     reject(Reject::signed_frame, msgid, "signed frame (" + describe(msgid) + "): signing is not supported",
            unverified_skip(total), on_reject);
