@@ -464,6 +464,57 @@ TEST_F(GossipProcesses, BadTimesAndCountsExitTwoNamingTheFlag) {
   }
 }
 
+// fact-fault-relay: a channel that two --channel patterns match is forwarded once (two
+// subscriptions forwarded every message twice and the copies bounced between the buses for ever:
+// 32 000 copies of 3 messages in 1.5 s; review, session 32). Flags that cannot work exit 2 naming
+// the flag: the same bus twice (another spelling of one URL), NaN probabilities, bad patterns.
+TEST_F(GossipProcesses, FaultRelayForwardsOnceAndRefusesUnusableFlags) {
+  const std::string drone = drone_url(6), swarm = "udpm://239.255.76.68:7668?ttl=0";
+  lcm::LCM drone_side(drone), swarm_side(swarm);
+  ASSERT_TRUE(drone_side.good() && swarm_side.good());
+  struct Count {
+    int n = 0;
+    void on(const lcm::ReceiveBuffer*, const std::string&) { ++n; }
+  } arrived;
+  swarm_side.subscribe("FACT_GOSSIP", &Count::on, &arrived);
+  Processes procs;
+  procs.start("relay", {FACT_FAULT_RELAY_BINARY, "--drone-url", drone, "--swarm-url", swarm, "--channel", "FACT_GOSSIP",
+                        "--channel", "FACT_GOSSIP", "--channel", "FACT_.*", "--faults", "both"},
+              log_);
+  std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(fact::test::scaled_s(0.5) * 1000)));
+  const std::string bytes = "not an envelope, forwarded byte for byte";
+  for (int i = 0; i < 3; ++i)
+    drone_side.publish("FACT_GOSSIP", (bytes + std::to_string(i)).data(), static_cast<unsigned>(bytes.size() + 1));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(fact::test::scaled_s(1) * 1000));
+  while (std::chrono::steady_clock::now() < end) swarm_side.handleTimeout(20);
+  EXPECT_EQ(arrived.n, 3);
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
+
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--swarm-url", drone + "&ttl=1"}, "are the same bus udpm://239.255.76.67:7706"},
+      {{"--drop", "nan"}, "--drop: expected a probability in [0, 1], got nan"},
+      {{"--reorder", "1.5"}, "--reorder: expected a probability in [0, 1]"},
+      {{"--max-delay-ms", "nan"}, "--max-delay-ms: expected a number in [1, 10000] ms, got nan"},
+      {{"--channel", "("}, "--channel (: not a valid channel regex"},
+      {{"--channel", ""}, "--channel: an empty pattern"},
+      {{"--status-channel", ""}, "--status-channel: empty"},
+      {{"--drone-id", "-7"}, "--drone-id: expected an id >= 0, got -7"},
+  };
+  for (const auto& [flags, reason] : cases) {
+    std::vector<std::string> args{FACT_FAULT_RELAY_BINARY, "--drone-url", drone};
+    if (flags[0] != "--swarm-url") args.insert(args.end(), {"--swarm-url", swarm});
+    args.insert(args.end(), flags.begin(), flags.end());
+    const std::string log = dir_ + "/bad-relay.log";
+    std::remove(log.c_str());
+    Processes bad;
+    bad.start("relay", args, log);
+    const std::map<std::string, int> codes = bad.wait_all(std::chrono::seconds(5));
+    EXPECT_EQ(codes.at("relay"), 2) << flags[0] << " " << flags[1];
+    const std::string text = tail(log, 5);
+    EXPECT_NE(text.find(reason), std::string::npos) << text;
+  }
+}
+
 #ifdef FACT_CLOCK_SHIFT_LIBRARY
 // Drone 1's wall clock steps back an hour, then forward two (clock_shift.c, preloaded into it
 // alone): it goes on completing rounds, and never publishes a set without the live drone 2. With

@@ -19,17 +19,25 @@
 // 2 s would be taken for an echo; gossip envelopes never repeat (each carries a new sequence
 // number), so only true duplicates are affected.
 //
+// --channel values are LCM channel regexes (POSIX extended, matching whole names); they are joined
+// into one subscription per side, so a channel that two patterns match is forwarded once (two
+// subscriptions forwarded it twice, and each copy's echo was absorbed once: the copies bounced
+// between the buses for ever; review, session 32). Hold-backs and echo memory run on the
+// monotonic clock (a wall-clock step must not hold messages for the step).
+//
 // Publishes its counters (fact::app_status_t) on the drone URL's --status-channel.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.
 #include "common/app.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
+#include <regex.h>
 
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <map>
@@ -39,6 +47,7 @@
 
 namespace {
 
+using fact::app::monotonic_us;
 using fact::app::now_us;
 
 // Every parameter, with its unit, in one place.
@@ -98,16 +107,19 @@ class Relay {
     faulty_[kSwarm] = f.faults == "to-swarm" || f.faults == "both";
   }
 
-  void subscribe() {
-    for (const std::string& c : f_.channels) {
-      lcm_[kDrone]->subscribe(c, &Relay::from_drone, this);
-      lcm_[kSwarm]->subscribe(c, &Relay::from_swarm, this);
-    }
+  // One subscription per side for every pattern together; false when LCM refuses it.
+  bool subscribe() {
+    std::string all;
+    for (const std::string& c : f_.channels) all += (all.empty() ? "(" : "|(") + c + ")";
+    all = "(" + all + ")";
+    return lcm_[kDrone]->subscribe(all, &Relay::from_drone, this) != nullptr &&
+           lcm_[kSwarm]->subscribe(all, &Relay::from_swarm, this) != nullptr;
   }
 
   const fact::app::Log& log() const { return log_; }
 
   // Releases held-back messages that are due; returns the wait until the next one (µs, ≤ cap).
+  // now: monotonic_us(); the status message is stamped with the wall clock.
   int64_t release(int64_t now, int64_t cap) {
     while (!held_.empty() && held_.begin()->first <= now) {
       const Held& h = held_.begin()->second;
@@ -115,7 +127,7 @@ class Relay {
       held_.erase(held_.begin());
     }
     status_.set_state("held " + std::to_string(held_.size()));
-    status_.tick(now);
+    status_.tick(now_us());
     int64_t wait = cap;
     if (!held_.empty()) wait = std::min(wait, held_.begin()->first - now);
     return std::max<int64_t>(wait, 0);
@@ -152,7 +164,7 @@ class Relay {
   }
 
   void forward(Side from, Side to, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const int64_t now = now_us();
+    const int64_t now = monotonic_us();
     forget_old_echoes(now);
     const uint64_t key = fnv(channel, rbuf->data, rbuf->data_size) ^ static_cast<uint64_t>(from);
     auto echo = echoes_.find(key);
@@ -207,6 +219,41 @@ class Relay {
   std::deque<std::pair<int64_t, uint64_t>> echo_order_;
 };
 
+// The bus a URL names, for telling whether two URLs are one bus: "" is LCM's default; options
+// (after '?', e.g. ttl) do not change the bus; a udpm URL without an address is LCM's default group.
+std::string bus_of(std::string url) {
+  if (url.empty()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    url = env != nullptr && *env != '\0' ? env : "udpm://239.255.76.67:7667";
+  }
+  url = url.substr(0, url.find('?'));
+  if (url == "udpm://" || url == "udpm") url = "udpm://239.255.76.67:7667";
+  return url;
+}
+
+// "" or what is wrong with the flags (naming the flag and the value).
+std::string flags_error(const Flags& f) {
+  if (bus_of(f.drone_url) == bus_of(f.swarm_url))
+    return "--drone-url " + f.drone_url + " and --swarm-url " + f.swarm_url + " are the same bus " + bus_of(f.drone_url) +
+           " (the relay would feed itself)";
+  for (auto [name, v] : {std::pair{"--drop", f.drop}, {"--dup", f.dup}, {"--reorder", f.reorder}})
+    if (!(v >= 0 && v <= 1)) return std::string(name) + ": expected a probability in [0, 1], got " + std::to_string(v);
+  if (!(f.max_delay_ms >= 1 && f.max_delay_ms <= 10000))
+    return "--max-delay-ms: expected a number in [1, 10000] ms, got " + std::to_string(f.max_delay_ms);
+  if (!(f.status_period >= 0.001 && f.status_period <= 3600))  // (as every app: the µs neither 0 nor overflowing)
+    return "--status-period: expected a number in [0.001, 3600] s, got " + std::to_string(f.status_period);
+  if (f.drone_id < -1) return "--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id);
+  if (f.status_channel.empty()) return "--status-channel: empty";
+  for (const std::string& c : f.channels) {
+    regex_t re;
+    if (c.empty()) return "--channel: an empty pattern";
+    if (regcomp(&re, ("^(" + c + ")$").c_str(), REG_EXTENDED | REG_NOSUB) != 0)
+      return "--channel " + c + ": not a valid channel regex (POSIX extended)";
+    regfree(&re);
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -215,16 +262,17 @@ int main(int argc, char** argv) {
                "loss, duplication and reordering."};
   cli.add_option("--drone-url", f.drone_url, "LCM URL of the drone side (its fact-gossip)")->required();
   cli.add_option("--swarm-url", f.swarm_url, "LCM URL of the swarm side (shared by every relay)")->required();
-  cli.add_option("--channel", f.channels, "Channel(s) to forward (repeatable)")->capture_default_str();
-  cli.add_option("--drop", f.drop, "Probability a message is dropped")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  cli.add_option("--dup", f.dup, "Probability a message is sent twice")->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  cli.add_option("--reorder", f.reorder, "Probability a message is held back (overtaken by later ones)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
-  cli.add_option("--max-delay-ms", f.max_delay_ms, "ms, the longest hold-back (reorder, duplicate copy)")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 10000.0));
-  cli.add_option("--seed", f.seed, "Seed of the fault stream")->capture_default_str();
+  cli.add_option("--channel", f.channels,
+                 "Channel(s) to forward (repeatable; LCM channel regexes, e.g. 'FACT_.*'; a channel several match "
+                 "is forwarded once)")
+      ->capture_default_str();
+  cli.add_option("--drop", f.drop, "Probability a message is dropped (0 … 1)")->capture_default_str();
+  cli.add_option("--dup", f.dup, "Probability a message is sent twice (0 … 1)")->capture_default_str();
+  cli.add_option("--reorder", f.reorder, "Probability a message is held back, overtaken by later ones (0 … 1)")
+      ->capture_default_str();
+  cli.add_option("--max-delay-ms", f.max_delay_ms, "ms, the longest hold-back (reorder, duplicate copy; 1 … 10000)")
+      ->capture_default_str();
+  cli.add_option("--seed", f.seed, "Seed of the fault stream (>= 0)")->capture_default_str()->check(CLI::NonNegativeNumber);
   cli.add_option("--faults", f.faults, "Directions with faults: to-drone | to-swarm | both")
       ->capture_default_str()
       ->check(CLI::IsMember({"to-drone", "to-swarm", "both"}));
@@ -238,12 +286,8 @@ int main(int argc, char** argv) {
     return cli.exit(e) == 0 ? 0 : 2;
   }
   fact::app::Log boot("fact-fault-relay", f.drone_id);
-  if (f.drone_url == f.swarm_url) {
-    boot.event("--drone-url and --swarm-url must differ (the relay would feed itself)");
-    return 2;
-  }
-  if (!(f.status_period >= 0.001 && f.status_period <= 3600)) {  // (as every app: the µs neither 0 nor overflowing)
-    boot.event("error: --status-period: expected a number in [0.001, 3600] s, got " + std::to_string(f.status_period));
+  if (const std::string e = flags_error(f); !e.empty()) {
+    boot.event("error: " + e);
     return 2;
   }
   lcm::LCM drone(f.drone_url), swarm(f.swarm_url);
@@ -253,13 +297,16 @@ int main(int argc, char** argv) {
   }
   fact::app::install_stop_handler();
   Relay relay(f, &drone, &swarm);
-  relay.subscribe();
+  if (!relay.subscribe()) {
+    boot.event("error: LCM refused the subscription to the --channel patterns");
+    return 2;
+  }
   relay.log().event("started: " + f.drone_url + " <-> " + f.swarm_url + ", drop " + std::to_string(f.drop) + ", dup " +
                     std::to_string(f.dup) + ", reorder " + std::to_string(f.reorder) + " (faults " + f.faults +
                     ", seed " + std::to_string(f.seed) + ")");
   const std::vector<lcm::LCM*> sides = {&drone, &swarm};
   while (!fact::app::stop_requested()) {
-    const int64_t wait = relay.release(now_us(), 100000);
+    const int64_t wait = relay.release(monotonic_us(), 100000);
     const int r = fact::app::handle_any(sides, wait);
     if (r == -1) {
       relay.log().event(std::string("poll failed: ") + std::strerror(errno));
