@@ -177,3 +177,33 @@ TEST_F(LogCompare, NoCountersNoCheck) {
 }
 
 }  // namespace
+
+// Several results for one input (fact-rounds-publish --incremental stamps its rounds with one
+// utime): each recorded result must be in the replay. Before, only the last result of an input was
+// kept and compared, and a replay whose first result differed matched (review, session 32).
+TEST_F(LogCompare, EveryResultOfOneInputIsCompared) {
+  const auto run = [](const std::string& first_status) {
+    std::vector<Event> v;
+    v.push_back(event(11, "FACT_RESULT_0", result(0, 10, 1, first_status)));
+    v.push_back(event(21, "FACT_RESULT_0", result(0, 10, 2, "certified")));
+    v.push_back(event(31, "FACT_RESULT_0", result(0, 10, 3, "certified")));
+    return v;
+  };
+  const Ran same = compare(run("ambiguous"), run("ambiguous"), "--no-planner");
+  EXPECT_EQ(same.code, 0) << same.out;
+  std::vector<Event> replay = run("ambiguous");
+  replay[0] = event(11, "FACT_RESULT_0", result(0, 10, 3, "certified"));  // the first replaced by the third
+  const Ran r = compare(run("ambiguous"), replay, "--no-planner");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("1 recorded results differ, 0 are missing from the replay"), std::string::npos) << r.out;
+}
+
+// Comparing planner decisions in a log that has none is an error (2) naming the drone, not a
+// difference (1): a log compared with itself "differed".
+TEST_F(LogCompare, NoPlannerDecisionsToCompareIsAnError) {
+  const std::vector<Event> results_only = {event(11, "FACT_RESULT_0", result(0, 10, 1, "certified"))};
+  const Ran r = compare(results_only, results_only);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no planner decisions for drone 0 on FACT_STATUS"), std::string::npos) << r.out;
+  EXPECT_EQ(compare(results_only, results_only, "--no-planner").code, 0);
+}

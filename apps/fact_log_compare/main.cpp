@@ -35,7 +35,9 @@ constexpr const char* kApp = "fact-log-compare";
 // What one log says about each drone.
 struct DroneTrace {
   std::vector<std::string> result_bytes;  // FACT_RESULT_<id>, in log order
-  std::map<int64_t, std::string> by_utime;  // the same, by the result's utime (its input's)
+  // The same, by the result's utime (its input's), in log order: one input may give several
+  // results (fact-rounds-publish --incremental publishes its rounds with one utime).
+  std::map<int64_t, std::vector<std::string>> by_utime;
   std::string last_status, last_reason;   // of the last result
   int last_rounds = 0;
   std::vector<std::string> planner_states;  // "<phase> round <k>", consecutive repeats dropped
@@ -83,7 +85,7 @@ bool read_log(const std::string& path, const Channels& ch, std::map<int, DroneTr
       DroneTrace& t = (*out)[m.drone_id];
       t.results.message();
       t.result_bytes.emplace_back(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
-      t.by_utime[m.utime] = t.result_bytes.back();
+      t.by_utime[m.utime].push_back(t.result_bytes.back());
       t.last_status = m.status;
       t.last_reason = m.reason;
       t.last_rounds = m.rounds_used;
@@ -181,16 +183,31 @@ int main(int argc, char** argv) {
       return 2;
     }
     const DroneTrace &x = a[id], &y = b[id];
-    // Every recorded result must be in the replay, the same bytes for the same input (utime). A
-    // replay result the recording lacks is reported, not a difference: under load a recorder can
-    // miss a UDP message that the apps themselves received.
-    int missing = 0, differing = 0, extra = 0;
-    for (const auto& [t, bytes] : x.by_utime) {
-      auto it = y.by_utime.find(t);
-      if (it == y.by_utime.end()) ++missing;
-      else if (it->second != bytes) ++differing;
+    if (!no_planner && x.planner_states.empty()) {
+      std::cerr << kApp << ": error: no planner decisions for drone " << id << " on " << status_channel << " in "
+                << original << " (compare the results only with --no-planner)\n";
+      return 2;
     }
-    for (const auto& [t, bytes] : y.by_utime) extra += x.by_utime.count(t) == 0;
+    // Every recorded result must be in the replay, the same bytes for the same input (utime), each
+    // taken once. A replay result the recording lacks is reported, not a difference: under load a
+    // recorder can miss a UDP message that the apps themselves received.
+    int missing = 0, differing = 0, extra = 0;
+    for (const auto& [t, list] : x.by_utime) {
+      auto it = y.by_utime.find(t);
+      if (it == y.by_utime.end()) {
+        missing += static_cast<int>(list.size());
+        continue;
+      }
+      std::vector<std::string> left = it->second;  // the replay's results for this input, not yet matched
+      for (const std::string& bytes : list) {
+        auto match = std::find(left.begin(), left.end(), bytes);
+        if (match == left.end()) ++differing;
+        else left.erase(match);
+      }
+      extra += static_cast<int>(left.size());
+    }
+    for (const auto& [t, list] : y.by_utime)
+      if (x.by_utime.count(t) == 0) extra += static_cast<int>(list.size());
     const bool same_results = missing == 0 && differing == 0;
     const bool same_planner = no_planner || (x.planner_states == y.planner_states && !x.planner_states.empty());
     all = all && same_results && same_planner;
