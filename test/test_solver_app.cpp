@@ -264,6 +264,21 @@ TEST_F(SolverApp, BadFlagsExitTwoNamingTheFlag) {
     EXPECT_EQ(run(name, words), 2) << args[0] << " " << args[1] << " " << args.back();
     EXPECT_NE(read_text(file(name + ".err")).find("error"), std::string::npos);
   }
+  // Each names the flag and the value (review, session 32: more rounds than the file were published
+  // as all of them, a directory or an over-long channel exited 1 as an LCM failure, a 1e10 s
+  // interval overflowed).
+  const std::vector<std::pair<std::vector<std::string>, std::string>> named = {
+      {{"--input", good, "--rounds", "1000"}, "--rounds 1000: " + good + " holds only"},
+      {{"--input", file("").string()}, "is a directory, not a rounds file"},
+      {{"--input", good, "--interval", "1e10"}, "--interval: expected a number of seconds in [0, 86400], got 1e+10"},
+      {{"--input", good, "--channel", std::string(64, 'C')}, "--channel: 64 characters, LCM allows at most 63"}};
+  for (const auto& [args, reason] : named) {
+    std::vector<std::string> words = {FACT_ROUNDS_PUBLISH_BINARY, "--lcm-url", kUrl};
+    words.insert(words.end(), args.begin(), args.end());
+    const std::string name = "bad" + std::to_string(i++);
+    EXPECT_EQ(run(name, words), 2) << args[2];
+    EXPECT_NE(read_text(file(name + ".err")).find(reason), std::string::npos) << read_text(file(name + ".err"));
+  }
 }
 
 TEST_F(SolverApp, UnusableLcmUrlExitsOne) {

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -87,11 +88,14 @@ void check(Options& o) {
   if (o.drone_id < 0) throw InputError("--drone-id: expected an id >= 0, got " + std::to_string(o.drone_id));
   if (o.channel.empty()) o.channel = fact::app::channel("FACT_SWARM_ROUNDS", o.drone_id);
   if (o.count < 0) throw InputError("--count: expected >= 0 (0 = until stopped), got " + std::to_string(o.count));
-  if (!(std::isfinite(o.interval) && o.interval >= 0)) {
+  if (!(o.interval >= 0 && o.interval <= 86400)) {  // (a day: a longer pause overflowed the clock's ticks)
     std::ostringstream s;
-    s << "--interval: expected a finite number of seconds >= 0, got " << o.interval;
+    s << "--interval: expected a number of seconds in [0, 86400], got " << o.interval;
     throw InputError(s.str());
   }
+  // LCM channel names are at most 63 bytes (udpm refused a longer one at publish time, exit 1).
+  if (o.channel.size() > 63)
+    throw InputError("--channel: " + std::to_string(o.channel.size()) + " characters, LCM allows at most 63: " + o.channel);
   if (o.rounds < 0) throw InputError("--rounds: expected >= 0 (0 = all), got " + std::to_string(o.rounds));
   if (o.utime < -1) throw InputError("--utime: expected microseconds >= 0 (or -1 = clock), got " + std::to_string(o.utime));
 }
@@ -100,11 +104,18 @@ std::string read_input(const std::string& name) {
   std::ifstream file;
   std::istream* in = &std::cin;
   if (name != "-") {
+    std::error_code ec;
+    if (std::filesystem::is_directory(name, ec)) throw InputError("--input " + name + ": is a directory, not a rounds file");
     file.open(name, std::ios::binary);
     if (!file) throw InputError("--input " + name + ": cannot open: " + std::strerror(errno));
     in = &file;
   }
-  std::string text{std::istreambuf_iterator<char>(*in), std::istreambuf_iterator<char>()};
+  std::string text;
+  try {
+    text.assign(std::istreambuf_iterator<char>(*in), std::istreambuf_iterator<char>());
+  } catch (const std::exception& e) {  // (a read error the stream reports by throwing)
+    throw InputError((name == "-" ? std::string("stdin") : name) + ": read failed: " + e.what());
+  }
   if (in->bad()) throw InputError((name == "-" ? std::string("stdin") : name) + ": read failed");
   return text;
 }
@@ -112,6 +123,9 @@ std::string read_input(const std::string& name) {
 // The messages to publish, one per distinct number of rounds (1 … K with --incremental, else K),
 // each checked by reading it back as fact-solver does. utime is filled in at publication.
 std::vector<fact::swarm_rounds_t> messages_from(const fact::Rounds& all, const Options& o) {
+  if (o.rounds > static_cast<int>(all.rounds.size()))
+    throw InputError("--rounds " + std::to_string(o.rounds) + ": " + o.input + " holds only " +
+                     std::to_string(all.rounds.size()) + " round(s)");
   const fact::Rounds rounds = fact::first_rounds(all, o.rounds);
   const int total = static_cast<int>(rounds.rounds.size());
   if (total == 0) throw InputError(o.input + ": no rounds to publish");
