@@ -622,6 +622,7 @@ TEST(FcBridge, FlagsAndLinkErrors) {
       {{"--serial", "/dev/null", "--baud", "12345"}, 2, "--baud: 12345 is not a supported rate"},
       {{"--udp", "14540:127.0.0.1:99999"}, 2, "remote port '99999'"},
       {{"--udp", "1:127.0.0.1:2", "--geofence", "1,2,3"}, 2, "--geofence: expected 6 numbers"},
+      {{"--udp", "1:127.0.0.1:2", "--geofence", "-1,1,-1,1,0,1,"}, 2, "--geofence: expected 6 numbers"},
       {{"--udp", "1:127.0.0.1:2", "--stream-rate", "2"}, 2, "more than 2 Hz"},
       {{"--udp", "1:127.0.0.1:2", "--sysid", "0"}, 2, ""},
       // Timeouts that round to 0 µs or never expire, a state rate that spins the loop, a fence beyond

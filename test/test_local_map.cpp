@@ -153,6 +153,58 @@ TEST(LocalMap, HeightWindowKeepsNeighboursInView) {
   }
 }
 
+// The grid follows the drone: a wall 1.5 m ahead of a drone 11.5 m or 30 m from its takeoff spot
+// is mapped (a grid fixed at ±12 m of the takeoff spot saw nothing there, and the planner moved
+// into the wall: review, session 32). Obstacles the drone flew away from are forgotten once they
+// fall outside, and bounds() says what the grid covers.
+TEST(LocalMap, TheGridFollowsTheDrone) {
+  for (double x : {0.0, 11.5, 30.0}) {
+    sim::World w;
+    w.room_size = {100, 100, 8};
+    const sim::Obstacle wall = sim::make_box(Vector3d(x + 1.8, 0, 1.0), Vector3d(0.6, 4.0, 2.0), 0.0);
+    w.obstacles = {wall};
+    sim::Renderer r(w, fact::d430_424x240(), {}, {}, 3);
+    fact::LocalMap map;
+    // The drone flies out along x from its takeoff spot, a frame every 0.5 m (the map sees the
+    // wall only from the last spot, 1.5 m before it).
+    fact::FrameIntegration st;
+    int recentred = 0;
+    for (double at = 0; at <= x + 1e-9; at += 0.5) {
+      const std::vector<sim::DronePose> drones = {pose(std::min(at, x), 0, 1.5)};
+      sim::RenderedFrame f;
+      r.render(drones, 0, &f);
+      ASSERT_EQ(map.add_frame(f.view(0), r.extrinsics(), map_pose(drones[0]), {}, &st), "");
+      recentred += st.recentred;
+    }
+    const fact::ObstacleBox b = map.bounds();
+    EXPECT_LT(b.lo.x(), x - 5);
+    EXPECT_GT(b.hi.x(), x + 5);
+    EXPECT_EQ(recentred > 0, x > 6.8) << x;  // (the drone stays within 12 − 5 − 0.2 m of the centre)
+    const auto pieces = map.pieces();
+    ASSERT_FALSE(pieces.empty()) << "no obstacle seen at x = " << x;
+    EXPECT_LE(distance_to_pieces(pieces, Vector3d(x + 1.5, 0, 1.5)), 0.2 * std::sqrt(3.0)) << x;
+  }
+  // An obstacle seen near the takeoff spot is forgotten when the drone is 30 m away.
+  sim::World w;
+  w.room_size = {100, 100, 8};
+  w.obstacles = {sim::make_box(Vector3d(2.0, 0, 1.0), Vector3d(0.6, 2.0, 2.0), 0.0)};
+  sim::Renderer r(w, fact::d430_424x240(), {}, {}, 3);
+  fact::LocalMap map;
+  sim::RenderedFrame f;
+  const std::vector<sim::DronePose> start = {pose(0, 0, 1.5)}, far = {pose(30, 0, 1.5, M_PI)};
+  r.render(start, 0, &f);
+  ASSERT_EQ(map.add_frame(f.view(0), r.extrinsics(), map_pose(start[0]), {}), "");
+  const int seen = map.occupied_voxels();
+  ASSERT_GT(seen, 0);
+  fact::FrameIntegration st;
+  r.render(far, 0, &f);
+  ASSERT_EQ(map.add_frame(f.view(0), r.extrinsics(), map_pose(far[0]), {}, &st), "");
+  EXPECT_TRUE(st.recentred);
+  EXPECT_EQ(st.forgotten, seen);
+  EXPECT_EQ(map.occupied_voxels(), 0);
+  EXPECT_TRUE(map.pieces().empty());
+}
+
 TEST(LocalMap, BadInputNamed) {
   fact::LocalMap map;
   fact::FrameView empty;
@@ -184,6 +236,12 @@ TEST(LocalMap, BadInputNamed) {
   fact::LocalMapParams bad;
   bad.resolution = 0;
   EXPECT_NE(fact::local_map_params_error(bad).find("resolution"), std::string::npos);
+  bad = {};
+  bad.half_extent_xy = 5;  // smaller than what a frame sees
+  EXPECT_NE(fact::local_map_params_error(bad).find("half_extent_xy = 5.000000 m must exceed max_range + resolution"),
+            std::string::npos);
+  mp.position.x() = 1e7;
+  EXPECT_EQ(map.add_frame(v, {}, mp, {}), "pose.position is beyond 1e6 m");
 }
 
 }  // namespace

@@ -487,6 +487,21 @@ TEST_F(PlannerApp, FollowsAnOdometryRestart) {
   EXPECT_EQ(p.stop(), 0);
 }
 
+// Complete rounds fewer than those already taken (a restarted fact-gossip) are counted and logged,
+// not silently dropped (review, session 32).
+TEST_F(PlannerApp, FewerCompleteRoundsThanTakenAreCountedAndLogged) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({});
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state;
+  w.publish_rounds(2);
+  w.publish_rounds(1);
+  ASSERT_TRUE(w.run([&] { return counter(w.status, "stale_rounds") >= 1; }, std::chrono::seconds(5)));
+  EXPECT_EQ(counter(w.status, "swarm_rounds"), 2);
+  EXPECT_EQ(p.stop(), 0);
+  EXPECT_NE(p.err().find("with 1 complete round(s), fewer than the 2 already taken: ignored"), std::string::npos) << p.err();
+}
+
 #ifdef FACT_CLOCK_SHIFT_LIBRARY
 // fact-planner's wall clock steps back an hour during the takeoff, then forward two: the setpoint
 // stream goes on without a gap or a jump (review, session 30: with intervals on the wall clock a
@@ -550,7 +565,12 @@ TEST_F(PlannerApp, BadFlagsExit2) {
       {{"--wait-timeout", "1e300"}, "--wait-timeout: expected a number in [0.01, 3600] s, got 1e+300"},
       {{"--v-max", "1e9"}, "v_max"},
       {{"--spin-rate", "1e-12"}, "spin_rate"},
-      {{"--fence", "-1,1,0,0.3"}, "fence[3]"}};
+      {{"--fence", "-1,1,0,0.3"}, "fence y [0.000000, 0.300000] m is not wider than 2·drone_radius"},
+      // (review, session 32: these spun for ever or were accepted, or named another field)
+      {{"--spin-overlap", "1e300"}, "spin_overlap"},
+      {{"--min-separation", "1e300"}, "min_separation"},
+      {{"--drone-radius", "1e5"}, "drone_radius"},
+      {{"--map-resolution", "1e300"}, "resolution (0.01 … 1 m)"}};
   for (const auto& [flags, message] : absurd) {
     std::vector<std::string> words = {FACT_PLANNER_BINARY, "--drone-id", "0"};
     words.insert(words.end(), flags.begin(), flags.end());

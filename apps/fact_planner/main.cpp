@@ -241,8 +241,8 @@ class Planner {
       : lcm_(lcm), o_(o), log_(kApp, o.common.drone_id), status_(&lcm, o.common.status_channel, kApp, o.common.drone_id),
         map_(o.map) {
     status_.set_period_us(static_cast<int64_t>(std::llround(o.common.status_period * 1e6)));
-    for (const char* c : {"odometry", "detections", "observations", "frames", "frames_mapped", "frames_without_detections",
-                          "swarm_rounds", "results", "setpoints", "rejected_setpoint", "rejected_nan", "rejected_range",
+    for (const char* c : {"odometry", "detections", "observations", "frames", "frames_mapped", "map_recentred", "frames_without_detections",
+                          "swarm_rounds", "stale_rounds", "results", "setpoints", "rejected_setpoint", "rejected_nan", "rejected_range",
                           "wrong_drone_id", "odometry_restarts",
                           "out_of_order", "invalid_input", "undecodable", "no_odometry_at_time", "map_failed", "plans",
                           "hover", "wait_timeouts", "publish_failed"})
@@ -338,7 +338,14 @@ class Planner {
     if (std::string e = fact::app::rounds_from_message(m, &rounds); !e.empty())
       return reject("invalid_input", "swarm_rounds on " + ch + ": " + e);
     status_.count("swarm_rounds");
-    if (m.complete_rounds < complete_rounds_) return;  // older than what we have
+    if (m.complete_rounds < complete_rounds_) {  // older than what we have (a restarted fact-gossip?)
+      status_.count("stale_rounds");
+      fact::app::log_counted(log_, "stale_rounds", status_.value("stale_rounds"),
+                             "swarm_rounds on " + ch + " with " + std::to_string(m.complete_rounds) +
+                                 " complete round(s), fewer than the " + std::to_string(complete_rounds_) +
+                                 " already taken: ignored");
+      return;
+    }
     complete_rounds_ = m.complete_rounds;
     round_starts_.clear();  // each drone's newest round-start pose, in its own frame
     std::map<int, int> newest;
@@ -425,6 +432,21 @@ class Planner {
     status_.publish(fact::app::now_us());
   }
 
+  // The planner's parameters with the fence cut to the map's extent: beyond it no obstacle is
+  // known, so no move may end there (the map follows the drone and always holds it well inside).
+  fact::PlannerParams within_map(fact::PlannerParams p) const {
+    const fact::ObstacleBox b = map_.bounds();
+    p.fence = {std::max(p.fence[0], b.lo.x()), std::min(p.fence[1], b.hi.x()), std::max(p.fence[2], b.lo.y()),
+               std::min(p.fence[3], b.hi.y())};
+    return p;
+  }
+
+  static std::string fmt2(double lo, double hi) {
+    char s[64];
+    std::snprintf(s, sizeof s, "[%.1f, %.1f]", lo, hi);
+    return s;
+  }
+
   void map_frame(const fact::frame_t& m) {
     Pose pose;
     if (!poses_.at(m.utime, us(o_.odometry_timeout), &pose))
@@ -442,9 +464,16 @@ class Planner {
     view.gray = m.gray.data();
     view.depth_mm = depth_.data();
     fact::MapPose mp{pose.position, pose.yaw, pose.pitch, pose.roll};
-    if (std::string e = map_.add_frame(view, extrinsics_, mp, boxes); !e.empty())
+    fact::FrameIntegration st;
+    if (std::string e = map_.add_frame(view, extrinsics_, mp, boxes, &st); !e.empty())
       return reject("map_failed", "frame seq " + std::to_string(m.seq) + ": " + e);
     status_.count("frames_mapped");
+    if (st.recentred) {
+      status_.count("map_recentred");
+      const fact::ObstacleBox b = map_.bounds();
+      log_.event("map re-centred on the drone: it covers x " + fmt2(b.lo.x(), b.hi.x()) + ", y " + fmt2(b.lo.y(), b.hi.y()) +
+                 " m of f_i; " + std::to_string(st.forgotten) + " occupied voxel(s) beyond it forgotten");
+    }
   }
 
   // A new trajectory from now.
@@ -519,7 +548,7 @@ class Planner {
     last_observed_ = in.observed;
     in.known = known();
     const std::vector<fact::ObstacleBox> pieces = map_.pieces();
-    fact::Plan plan = fact::plan_step(in, pieces, o_.planner);
+    fact::Plan plan = fact::plan_step(in, pieces, within_map(o_.planner));
     rng_ = plan.rng;
     status_.count("plans");
     std::ostringstream s;

@@ -109,7 +109,9 @@ fact::bridge::Geofence parse_geofence(const std::string& text) {
       throw FlagError("--geofence: '" + part + "' in '" + text + "' is beyond ±1e+06 m");
     v.push_back(d);
   }
-  if (v.size() != 6) throw FlagError("--geofence: expected 6 numbers XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX, got '" + text + "'");
+  // (getline yields no field after a trailing comma, which "1,2,3,4,5,6," slipped through)
+  if (v.size() != 6 || text.back() == ',')
+    throw FlagError("--geofence: expected 6 numbers XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX, got '" + text + "'");
   fact::bridge::Geofence g;
   for (int i = 0; i < 3; ++i) {
     g.min[i] = v[2 * i];

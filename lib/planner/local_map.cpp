@@ -13,10 +13,12 @@ double box_distance(const ObstacleBox& b, const Eigen::Vector3d& p) {
 
 std::string local_map_params_error(const LocalMapParams& p) {
   auto bad = [](const char* name, double v) { return std::string(name) + " = " + std::to_string(v) + " is invalid"; };
-  if (!(p.resolution > 0.01) || !std::isfinite(p.resolution)) return bad("resolution", p.resolution);
-  if (!(p.half_extent_xy > p.resolution) || !std::isfinite(p.half_extent_xy)) return bad("half_extent_xy", p.half_extent_xy);
+  if (!(p.resolution > 0.01 && p.resolution <= 1)) return bad("resolution (0.01 … 1 m)", p.resolution);
   if (!(p.z_max > p.z_min) || !std::isfinite(p.z_min) || !std::isfinite(p.z_max)) return bad("z_max", p.z_max);
   if (!(p.min_range >= 0) || !(p.max_range > p.min_range) || !std::isfinite(p.max_range)) return bad("max_range", p.max_range);
+  if (!(p.half_extent_xy > p.max_range + p.resolution) || !std::isfinite(p.half_extent_xy))
+    return "half_extent_xy = " + std::to_string(p.half_extent_xy) + " m must exceed max_range + resolution = " +
+           std::to_string(p.max_range + p.resolution) + " m (the grid must hold what a frame sees)";
   if (!std::isfinite(p.floor_height)) return bad("floor_height", p.floor_height);
   if (p.hit_threshold < 1 || p.hit_threshold > 60000) return bad("hit_threshold", p.hit_threshold);
   if (p.pixel_step < 1) return bad("pixel_step", p.pixel_step);
@@ -52,6 +54,7 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
   if (!kerr.empty()) return "frame.intrinsics: " + kerr;
   if (frame.depth_mm == nullptr) return "frame.depth_mm is null";
   if (!pose.position.allFinite()) return "pose.position is not finite";
+  if (pose.position.cwiseAbs().maxCoeff() > 1e6) return "pose.position is beyond 1e6 m";
   if (!std::isfinite(pose.yaw)) return "pose.yaw is not finite";
   if (!std::isfinite(pose.pitch)) return "pose.pitch is not finite";
   if (!std::isfinite(pose.roll)) return "pose.roll is not finite";
@@ -89,6 +92,7 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
       std::fill(mask_.begin() + v * W + static_cast<int>(u0), mask_.begin() + v * W + static_cast<int>(u1) + 1, 1);
   }
   // p_f = R_fc · p_c + t_fc; R_fc (3×3) = attitude · R_body_cam, t_fc (3) = attitude · t_body_cam + position.
+  const int forgotten = follow(pose.position);
   const Eigen::Matrix3d att = body_attitude(pose.yaw, pose.pitch, pose.roll);
   const Eigen::Matrix3f R = (att * extrinsics.R_body_cam).cast<float>();
   const Eigen::Vector3f t = (att * extrinsics.t_body_cam + pose.position).cast<float>();
@@ -97,6 +101,8 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
   const float zmin_mm = static_cast<float>(params_.min_range * 1000), zmax_mm = static_cast<float>(params_.max_range * 1000);
   const float floor_z = static_cast<float>(params_.floor_height);
   FrameIntegration st;
+  st.recentred = forgotten >= 0;
+  st.forgotten = std::max(forgotten, 0);
   Eigen::Vector3i tlo = touched_lo_, thi = touched_hi_;
   const int step = params_.pixel_step;
   for (int v = 0; v < H; v += step) {
@@ -139,6 +145,47 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
   touched_hi_ = thi;
   if (stats) *stats = st;
   return "";
+}
+
+int LocalMap::follow(const Eigen::Vector3d& p) {
+  const double half = 0.5 * nx_ * params_.resolution;  // (nx_ = ny_)
+  const Eigen::Vector2d centre = origin_.head<2>() + Eigen::Vector2d::Constant(half);
+  const double keep = half - params_.max_range - params_.resolution;  // > 0 (local_map_params_error)
+  if ((p.head<2>() - centre).cwiseAbs().maxCoeff() <= keep) return -1;
+  // Shift by whole voxels: new voxel (ix, iy) is old voxel (ix + sx, iy + sy).
+  const int sx = static_cast<int>(std::lround((p.x() - centre.x()) / params_.resolution));
+  const int sy = static_cast<int>(std::lround((p.y() - centre.y()) / params_.resolution));
+  const uint16_t thr = static_cast<uint16_t>(params_.hit_threshold);
+  std::vector<uint16_t> moved(hits_.size(), 0);
+  int kept = 0;
+  for (int iz = 0; iz < nz_; ++iz)
+    for (int iy = 0; iy < ny_; ++iy) {
+      const int oy = iy + sy;
+      if (oy < 0 || oy >= ny_) continue;
+      for (int ix = 0; ix < nx_; ++ix) {
+        const int ox = ix + sx;
+        if (ox < 0 || ox >= nx_) continue;
+        const uint16_t h = hits_[(static_cast<size_t>(iz) * ny_ + oy) * nx_ + ox];
+        moved[(static_cast<size_t>(iz) * ny_ + iy) * nx_ + ix] = h;
+        kept += h >= thr;
+      }
+    }
+  const int forgotten = occupied_voxels() - kept;
+  hits_.swap(moved);
+  origin_ += params_.resolution * Eigen::Vector3d(sx, sy, 0);
+  if ((touched_hi_.array() >= touched_lo_.array()).all()) {
+    const Eigen::Vector3i shift(sx, sy, 0), top(nx_ - 1, ny_ - 1, nz_ - 1);
+    touched_lo_ = (touched_lo_ - shift).cwiseMax(0);
+    touched_hi_ = (touched_hi_ - shift).cwiseMin(top);
+  }
+  return forgotten;
+}
+
+ObstacleBox LocalMap::bounds() const {
+  ObstacleBox b;
+  b.lo = origin_;
+  b.hi = origin_ + params_.resolution * Eigen::Vector3d(nx_, ny_, nz_);
+  return b;
 }
 
 int LocalMap::occupied_voxels() const {

@@ -69,10 +69,26 @@ std::string planner_params_error(const PlannerParams& p) {
   if (!within(p.v_max, 0.01, 20)) return bad("v_max", p.v_max);
   if (!within(p.a_max, 0.01, 50)) return bad("a_max", p.a_max);
   if (!within(p.move_settle, 0, 60)) return bad("move_settle", p.move_settle);
+  // (review, session 32: a spin_overlap of 1e300 rad spun for ever; margins and the separation of
+  // 1e300 m were accepted)
+  if (!within(p.spin_overlap, 0, 6.3)) return bad("spin_overlap", p.spin_overlap);
+  if (!within(p.min_separation, 0, 100)) return bad("min_separation", p.min_separation);
+  if (!within(p.move_margin, 0, 10)) return bad("move_margin", p.move_margin);
+  if (!within(p.drone_radius, 0, 10)) return bad("drone_radius", p.drone_radius);
+  if (!within(p.obstacle_margin, 0, 10)) return bad("obstacle_margin", p.obstacle_margin);
+  if (!within(p.push_epsilon, 0, 1)) return bad("push_epsilon", p.push_epsilon);
+  if (!within(p.check_spacing, 0, 10)) return bad("check_spacing", p.check_spacing);
+  if (!within(p.min_useful_move, 0, 100)) return bad("min_useful_move", p.min_useful_move);
+  if (p.push_tries > 1000) return bad("push_tries", p.push_tries);
   for (int k = 0; k < 4; ++k)
     if (!within(p.fence[k], -1e6, 1e6)) return bad(k < 2 ? "fence (x)" : "fence (y)", p.fence[k]);
-  if (!(p.fence[1] - p.fence[0] > 2 * p.drone_radius)) return bad("fence[1] (XMAX)", p.fence[1]);
-  if (!(p.fence[3] - p.fence[2] > 2 * p.drone_radius)) return bad("fence[3] (YMAX)", p.fence[3]);
+  // (the message names both ends and the radius: a large drone_radius was reported as a bad XMAX)
+  for (int axis = 0; axis < 2; ++axis) {
+    const double lo = p.fence[2 * axis], hi = p.fence[2 * axis + 1];
+    if (!(hi - lo > 2 * p.drone_radius))
+      return std::string("PlannerParams.fence ") + (axis == 0 ? "x" : "y") + " [" + std::to_string(lo) + ", " +
+             std::to_string(hi) + "] m is not wider than 2·drone_radius = " + std::to_string(2 * p.drone_radius) + " m";
+  }
   if (!std::isfinite(p.takeoff_min) || p.takeoff_min < 0) return bad("takeoff_min", p.takeoff_min);
   if (!std::isfinite(p.takeoff_max) || p.takeoff_max < p.takeoff_min) return bad("takeoff_max", p.takeoff_max);
   if (!pos(p.spin_rate)) return bad("spin_rate", p.spin_rate);

@@ -4,6 +4,11 @@
 // below the floor height are ignored; the rest are counted in a voxel grid. A voxel hit at least
 // `hit_threshold` times is occupied (single noisy returns are rejected). Occupied voxels are merged
 // greedily into axis-aligned boxes: the convex obstacle pieces the planner's safety checks use.
+// The grid follows the drone: when a frame's pose comes closer than max_range + resolution to the
+// grid's horizontal edge, the grid is re-centred on the drone (shifted by whole voxels; what falls
+// outside is forgotten), so every point a frame can see lies inside it. Beyond bounds() nothing is
+// known: the planner keeps its moves inside (review, session 32: a grid fixed at ±12 m of the
+// takeoff spot dropped every obstacle beyond, and the planner moved through them).
 //
 // Frames: f_i is FLU, z up, metres, origin at the drone's takeoff spot on the floor (z = 0 is the
 // floor). Camera conventions are fact/camera.h's: p_b = R_body_cam · p_c + t_body_cam,
@@ -39,7 +44,8 @@ double box_distance(const ObstacleBox& b, const Eigen::Vector3d& p);
 
 struct LocalMapParams {
   double resolution = 0.2;       // m, voxel edge
-  double half_extent_xy = 12.0;  // m, the grid covers x, y ∈ [−half_extent_xy, half_extent_xy] of f_i
+  double half_extent_xy = 12.0;  // m, the grid covers x, y within half_extent_xy of its centre (first
+                                 // the takeoff spot, then the drone: see the header); > max_range + resolution
   double z_min = -1.0;           // m, grid bottom in f_i
   double z_max = 5.0;            // m, grid top in f_i
   double min_range = 0.25;       // m, optical z below this is ignored
@@ -62,6 +68,8 @@ struct FrameIntegration {
   int removed_drone = 0;   // valid pixels removed because they lie in a detected drone's box
   int out_of_range = 0;    // invalid depth, outside [min_range, max_range], or outside the grid
   int floor = 0;           // below floor_height
+  bool recentred = false;  // the grid was re-centred on the drone before this frame
+  int forgotten = 0;       // occupied voxels that fell outside the re-centred grid
 };
 
 class LocalMap {
@@ -77,6 +85,8 @@ class LocalMap {
   std::vector<ObstacleBox> pieces() const;
   int occupied_voxels() const;
   bool occupied(const Eigen::Vector3d& p_f) const;  // the voxel holding p_f is occupied
+  // The region the grid covers now (f_i): obstacles are known only inside it.
+  ObstacleBox bounds() const;
   void clear();
   const LocalMapParams& params() const { return params_; }
 
@@ -89,6 +99,10 @@ class LocalMap {
   std::vector<float> ray_x_, ray_y_;  // per column / row: (u − cx)/fx, (v − cy)/fy
   CameraIntrinsics rays_for_;
   std::vector<uint8_t> mask_;     // per pixel: 1 inside a dilated drone box (scratch)
+
+  // Re-centres the grid on p (f_i) when p is too near its horizontal edge; the occupied voxels
+  // forgotten, or −1 when it stayed.
+  int follow(const Eigen::Vector3d& p);
 };
 
 }  // namespace fact
