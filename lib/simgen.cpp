@@ -120,10 +120,19 @@ void require_positive(const std::string& name, double v, const std::string& unit
   if (v <= 0) fail(name, text(v), "must be > 0" + in_units(unit));
 }
 
+// Upper ends beyond any swarm the estimator takes (review, session 32: 2^31 rounds or 1e9 false
+// positives ate the machine's memory, a 1e308 m room wrote rounds fact-solve refuses).
+void require_at_most(const std::string& name, double v, double max, const std::string& unit) {
+  if (v > max) fail(name, text(v), "must be ≤ " + text(max) + in_units(unit));
+}
+
 void validate_counts(const SimOptions& o) {
   if (o.drones < 2) fail("drones", std::to_string(o.drones), "need at least 2 drones");
   if (o.rounds < 1) fail("rounds", std::to_string(o.rounds), "need at least 1 round");
   if (o.obstacles < 0) fail("obstacles", std::to_string(o.obstacles), "must be ≥ 0");
+  require_at_most("drones", o.drones, kMaxDrones, "the estimator's limit");
+  require_at_most("rounds", o.rounds, 10000, "");
+  require_at_most("obstacles", o.obstacles, 10000, "");
   if (o.ids.empty()) return;
   if (static_cast<int>(o.ids.size()) != o.drones)
     fail("ids", std::to_string(o.ids.size()) + " ids", "need one per drone, drones = " + std::to_string(o.drones));
@@ -137,6 +146,7 @@ void validate_counts(const SimOptions& o) {
 
 void validate_geometry(const SimOptions& o) {
   require_positive("room", o.room, "m");
+  require_at_most("room", o.room, 1000, "m");
   require_positive("spacing", o.spacing, "m");
   require_at_least("height_min", o.height_min, 0, "m");
   require_at_least("height_max", o.height_max, 0, "m");
@@ -161,6 +171,9 @@ void validate_sensor(const SimOptions& o) {
   require_at_least("miss_rate", o.miss_rate, 0, "");
   if (o.miss_rate > 1) fail("miss_rate", text(o.miss_rate), "is a probability, must be ≤ 1");
   require_at_least("false_positives", o.false_positives, 0, "per drone per round");
+  require_at_most("false_positives", o.false_positives, 100, "per drone per round");
+  require_at_most("paper_sigma", o.paper_sigma, 10, "");
+  require_at_most("depth_c", o.depth_c, 10, "1/m");
   require_at_least("drift_yaw", o.drift_yaw, 0, "rad per round");
   require_at_least("drift_position", o.drift_position, 0, "m per round");
 }

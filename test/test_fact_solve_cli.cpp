@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "fact/estimator.h"
+#include "fact/file_write.h"
 #include "fact/json_io.h"
 #include "fact/simgen.h"
 #include "temp_dir.h"
@@ -54,24 +57,24 @@ class FactSolveCli : public fact::test::TempDirTest {
 
   fs::path file(const std::string& name) const { return dir_ / name; }
 
-  // Runs fact-solve with `args`, feeding `input` on stdin.
-  Outcome run(const std::vector<std::string>& args, const std::string& input = "") {
+  // Runs fact-solve (or `binary`) with `args`, feeding `input` on stdin.
+  Outcome run(const std::vector<std::string>& args, const std::string& input = "", const char* binary = FACT_SOLVE_BINARY) {
     write_file(file("stdin"), input);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 0, file("stdin").c_str(), O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&actions, 1, file("stdout").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, 2, file("stderr").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> words = {FACT_SOLVE_BINARY};
+    std::vector<std::string> words = {binary};
     words.insert(words.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (std::string& w : words) argv.push_back(w.data());
     argv.push_back(nullptr);
     pid_t pid = 0;
-    const int spawned = posix_spawn(&pid, FACT_SOLVE_BINARY, &actions, nullptr, argv.data(), environ);
+    const int spawned = posix_spawn(&pid, binary, &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
     Outcome r;
-    EXPECT_EQ(spawned, 0) << "cannot start " << FACT_SOLVE_BINARY;
+    EXPECT_EQ(spawned, 0) << "cannot start " << binary;
     if (spawned != 0) return r;
     int status = 0;
     EXPECT_EQ(waitpid(pid, &status, 0), pid);
@@ -345,3 +348,92 @@ TEST_F(FactSolveCli, DefaultScenarioIsCertified) {
 }
 
 }  // namespace
+
+// Review, session 32 (helper-25): input that crashed the tools, output files left half-written or
+// corrupted, limits that let a file take the machine's memory.
+
+// Nested 100 000 levels deep: refused at 64 levels, naming where (printing the value for the
+// message recursed until the stack overflowed: signal 11).
+TEST_F(FactSolveCli, DeeplyNestedJsonIsRefusedNotACrash) {
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  const Outcome r = run({}, deep);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nested deeper than 64 levels"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 2000u);
+  write_file(file("deep.json"), "[[0,0,1]," + deep + "]");
+  const Outcome s = run({"--positions", file("deep.json").string(), "--drones", "2"}, "", FACT_SIMGEN_BINARY);
+  EXPECT_EQ(s.code, 2) << s.err;
+  EXPECT_NE(s.err.find("--positions " + file("deep.json").string() + ": "), std::string::npos) << s.err;
+  EXPECT_NE(s.err.find("nested deeper than 64 levels"), std::string::npos) << s.err;
+}
+
+// More drones than the estimator takes (a 1.3 MB file of 200 000 ids took 20 GB, then bad_alloc),
+// and rounds listed out of order, are invalid input naming the field.
+TEST_F(FactSolveCli, TooManyDronesOrRoundsOutOfOrderAreInvalidInput) {
+  fact::Rounds many = fact::rounds_from_json(kValidRounds);
+  for (int id = 100; many.drones.size() <= static_cast<size_t>(fact::kMaxDrones); ++id) many.drones.push_back(id);
+  const Outcome r = run({"--input", rounds_file(many)});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("drones: 257 drones listed, at most 256 are supported"), std::string::npos) << r.err;
+  fact::Rounds reversed = scenario().rounds;
+  std::reverse(reversed.rounds.begin(), reversed.rounds.end());
+  const Outcome o = run({"--input", rounds_file(reversed)});
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("round 1: index 1 is not above round 0's index 2"), std::string::npos) << o.err;
+  // An invalid_input result has no poses: null, not a made-up zero pose.
+  EXPECT_NE(o.out.find("\"yaw\": null"), std::string::npos) << o.out;
+}
+
+// fact-simgen: --output and --truth naming one file (the truth was written over the rounds, exit 0),
+// out-of-range counts and seeds, and files that are replaced whole.
+TEST_F(FactSolveCli, SimgenRefusesOneFileTwiceAndAbsurdSizes) {
+  const std::string out = file("same.json").string();
+  const Outcome same = run({"--output", out, "--truth", out}, "", FACT_SIMGEN_BINARY);
+  EXPECT_EQ(same.code, 2) << same.err;
+  EXPECT_NE(same.err.find("--truth " + out + ": the same file as --output"), std::string::npos) << same.err;
+  EXPECT_FALSE(fs::exists(out));
+  const std::pair<std::vector<std::string>, std::string> cases[] = {
+      {{"--rounds", "2147483647"}, "--rounds = 2147483647: must be ≤ 10000"},
+      {{"--drones", "100000"}, "--drones = 100000: must be ≤ 256"},
+      {{"--false-positives", "1e9"}, "--false-positives = 1000000000: must be ≤ 100"},
+      {{"--room", "1e308"}, "--room = 1e+308: must be ≤ 1000"},
+      {{"--seed", "-1"}, "--seed: expected an integer in [0, 18446744073709551615], got '-1'"},
+      {{"--seed", "18446744073709551616"}, "got '18446744073709551616'"}};
+  for (const auto& [args, says] : cases) {
+    const Outcome r = run(args, "", FACT_SIMGEN_BINARY);
+    EXPECT_EQ(r.code, 2) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+  }
+  // A truth file that cannot be written leaves no partial file behind; the rounds file is whole.
+  const Outcome ok = run({"--output", out, "--truth", file("no/such/dir/t.json").string()}, "", FACT_SIMGEN_BINARY);
+  EXPECT_EQ(ok.code, 2) << ok.err;
+  EXPECT_NO_THROW(fact::rounds_from_json(read_file(out)));
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+}
+
+// A write that fails part-way (here the file-size limit, standing in for a full disk) leaves the
+// previous file as it was and no partial file; before, the result was cut off in place.
+TEST_F(FactSolveCli, AFailedWriteLeavesThePreviousFileWhole) {
+  const std::string path = file("result.json").string();
+  write_file(path, "the previous result\n");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{4096, 4096};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    const std::string e = fact::write_file_atomically(path, std::string(100000, 'x'));
+    _exit(e.find("the file is unchanged") != std::string::npos ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the write did not fail with its reason";
+  EXPECT_EQ(read_file(path), "the previous result\n");
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  EXPECT_EQ(fact::write_file_atomically(path, "new\n"), "");
+  EXPECT_EQ(read_file(path), "new\n");
+  EXPECT_EQ(fact::write_file_atomically("/dev/null", "discarded\n"), "");  // a device is written in place
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+}

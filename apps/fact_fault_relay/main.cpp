@@ -28,6 +28,7 @@
 // Publishes its counters (fact::app_status_t) on the drone URL's --status-channel.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.
 #include "common/app.h"
+#include "common/uint64_flag.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -272,7 +273,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cli.add_option("--max-delay-ms", f.max_delay_ms, "ms, the longest hold-back (reorder, duplicate copy; 1 … 10000)")
       ->capture_default_str();
-  cli.add_option("--seed", f.seed, "Seed of the fault stream (>= 0)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cli.add_option("--seed", f.seed, "Seed of the fault stream (>= 0)")->capture_default_str()->check(fact::app::uint64_text());
   cli.add_option("--faults", f.faults, "Directions with faults: to-drone | to-swarm | both")
       ->capture_default_str()
       ->check(CLI::IsMember({"to-drone", "to-swarm", "both"}));

@@ -1,11 +1,12 @@
 // fact-simgen: generate a simulated swarm's observation rounds (fact-rounds-v1) and, optionally,
 // its ground truth (fact-truth-v1), deterministic by seed. The model is fact::generate_scenario's
 // (fact/simgen.h). Exit status: 0 written, 2 bad options or unwritable/unreadable files.
+#include "common/uint64_flag.h"
+#include "fact/file_write.h"
 #include "fact/json_io.h"
 #include "fact/simgen.h"
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
 #include <charconv>
 #include <fstream>
@@ -82,7 +83,8 @@ void add_sensor_options(CLI::App& app, Command& c) {
   app.add_option("--false-positives", s.false_positives, "mean spurious detections per drone per round (Poisson)");
   app.add_option("--drift-yaw", s.drift_yaw, "VIO yaw random walk: sigma per round (rad)");
   app.add_option("--drift-position", s.drift_position, "VIO position random walk: sigma per round and axis (m)");
-  app.add_option("--seed", s.seed, "random seed; the same seed and options give the same files");
+  app.add_option("--seed", s.seed, "random seed; the same seed and options give the same files")
+      ->check(fact::app::uint64_text());
 }
 
 void add_file_options(CLI::App& app, Command& c) {
@@ -100,53 +102,25 @@ std::string read_text(const std::string& path, const std::string& option) {
   return text.str();
 }
 
-// The JSON array in the file `path` given to `option`; `what` names its elements in errors.
-nlohmann::json read_json_array(const std::string& path, const std::string& option, const std::string& what) {
-  nlohmann::json doc;
+// The file `path` given to `option`, read by `parse` (fact/json_io.h: the JSON path and value of
+// whatever is wrong, a repeated key, nesting deeper than 64 levels, a number beyond a double).
+template <class Parse>
+auto read_json_file(const std::string& path, const std::string& option, Parse parse) {
   try {
-    doc = nlohmann::json::parse(read_text(path, option));
-  } catch (const nlohmann::json::parse_error& e) {
-    throw UsageError(option + " " + path + ": not JSON: " + e.what());
+    return parse(read_text(path, option));
+  } catch (const fact::FormatError& e) {
+    throw UsageError(option + " " + path + ": " + e.what());
   }
-  if (!doc.is_array()) throw UsageError(option + " " + path + ": expected an array of " + what + ", got " + doc.dump());
-  return doc;
-}
-
-double read_number(const nlohmann::json& value, const std::string& at) {
-  if (!value.is_number()) throw UsageError(at + ": expected a number, got " + value.dump());
-  return value.get<double>();
-}
-
-Eigen::Vector3d read_vec3(const nlohmann::json& value, const std::string& at) {
-  if (!value.is_array() || value.size() != 3) throw UsageError(at + ": expected [x, y, z], got " + value.dump());
-  return {read_number(value[0], at + "[0]"), read_number(value[1], at + "[1]"), read_number(value[2], at + "[2]")};
 }
 
 // A JSON array of [x, y, z] arrays (world, m).
 std::vector<Eigen::Vector3d> read_positions(const std::string& path) {
-  const nlohmann::json doc = read_json_array(path, "--positions", "[x, y, z]");
-  std::vector<Eigen::Vector3d> positions;
-  for (std::size_t i = 0; i < doc.size(); ++i)
-    positions.push_back(read_vec3(doc[i], "--positions " + path + ": [" + std::to_string(i) + "]"));
-  return positions;
+  return read_json_file(path, "--positions", fact::positions_from_json);
 }
 
 // A JSON array of {"center": [x, y, z], "radius": r, "height": h} (world, m).
 std::vector<fact::Obstacle> read_obstacles(const std::string& path) {
-  const nlohmann::json doc = read_json_array(path, "--given-obstacles", "obstacles");
-  std::vector<fact::Obstacle> obstacles;
-  for (std::size_t i = 0; i < doc.size(); ++i) {
-    const std::string at = "--given-obstacles " + path + ": [" + std::to_string(i) + "]";
-    const nlohmann::json& o = doc[i];
-    if (!o.is_object() || o.size() != 3 || !o.contains("center") || !o.contains("radius") || !o.contains("height"))
-      throw UsageError(at + ": expected {\"center\": [x, y, z], \"radius\": r, \"height\": h}, got " + o.dump());
-    fact::Obstacle obstacle;
-    obstacle.center = read_vec3(o["center"], at + ".center");
-    obstacle.radius = read_number(o["radius"], at + ".radius");
-    obstacle.height = read_number(o["height"], at + ".height");
-    obstacles.push_back(obstacle);
-  }
-  return obstacles;
+  return read_json_file(path, "--given-obstacles", fact::obstacles_from_json);
 }
 
 // "3,5,9" → {3, 5, 9}; every item must be a whole integer.
@@ -180,16 +154,9 @@ fact::SimOptions sim_options(const Command& c, bool formation_given_explicitly) 
   return s;
 }
 
-std::ofstream open_for_writing(const std::string& path, const std::string& option) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw UsageError(option + " " + path + ": cannot open for writing");
-  return out;
-}
-
-void write(std::ostream& out, const std::string& text, const std::string& what) {
-  out << text << '\n';
-  out.flush();
-  if (!out) throw UsageError(what + ": write failed");
+// Whole or not at all (fact::write_file_atomically): a failed write leaves an earlier file as it was.
+void write_file(const std::string& path, const std::string& text, const std::string& option) {
+  if (const std::string e = fact::write_file_atomically(path, text + "\n"); !e.empty()) throw UsageError(option + " " + e);
 }
 
 int count_detections(const fact::Rounds& rounds) {
@@ -232,8 +199,10 @@ std::string with_flag_names(const std::string& message) {
   return out + message.substr(copied);
 }
 
-// Generates and writes; both files are opened before anything is written.
+// Generates and writes each file whole (the rounds, then the truth).
 void run(const Command& c, bool formation_given_explicitly) {
+  if (!c.output.empty() && !c.truth.empty() && fact::same_file(c.output, c.truth))
+    throw UsageError("--truth " + c.truth + ": the same file as --output " + c.output);
   const fact::SimOptions options = sim_options(c, formation_given_explicitly);
   fact::Scenario scenario;
   try {
@@ -241,15 +210,13 @@ void run(const Command& c, bool formation_given_explicitly) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(with_flag_names(e.what()));
   }
-  std::ofstream output_file, truth_file;
-  if (!c.output.empty()) output_file = open_for_writing(c.output, "--output");
-  if (!c.truth.empty()) truth_file = open_for_writing(c.truth, "--truth");
   if (c.output.empty()) {
-    write(std::cout, fact::rounds_to_json(scenario.rounds), "stdout");
+    std::cout << fact::rounds_to_json(scenario.rounds) << '\n' << std::flush;
+    if (!std::cout) throw UsageError("stdout: write failed");
   } else {
-    write(output_file, fact::rounds_to_json(scenario.rounds), "--output " + c.output);
+    write_file(c.output, fact::rounds_to_json(scenario.rounds), "--output");
   }
-  if (!c.truth.empty()) write(truth_file, fact::truth_to_json(scenario.truth), "--truth " + c.truth);
+  if (!c.truth.empty()) write_file(c.truth, fact::truth_to_json(scenario.truth), "--truth");
   std::cerr << "fact-simgen: wrote N = " << options.drones << " drones, K = " << options.rounds << " rounds, "
             << count_detections(scenario.rounds) << " detections (false positives: "
             << count_false_positives(scenario.truth) << "), formation " << fact::to_string(options.formation) << ", noise "

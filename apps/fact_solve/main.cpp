@@ -4,6 +4,7 @@
 // Exit codes: 0 certified; 3 not certified (the result is still written); 2 invalid input (bad
 // flags, unreadable or malformed input, or an invalid_input result, which is still written);
 // 1 the output could not be written, or an internal error.
+#include "fact/file_write.h"
 #include "fact/estimator.h"
 #include "fact/json_io.h"
 #include "common/estimator_flags.h"
@@ -107,11 +108,8 @@ void write_output(const std::string& name, const std::string& text) {
     if (!std::cout) throw OutputError("stdout: write failed");
     return;
   }
-  std::ofstream file(name, std::ios::binary | std::ios::trunc);
-  if (!file) throw OutputError("--output " + name + ": cannot open: " + std::strerror(errno));
-  file << text;
-  file.close();
-  if (!file) throw OutputError("--output " + name + ": write failed: " + std::strerror(errno));
+  // Whole or not at all: a full disk used to leave half a result in place of the previous one.
+  if (const std::string e = fact::write_file_atomically(name, text); !e.empty()) throw OutputError("--output " + e);
 }
 
 int exit_code(fact::EstimateStatus status) {

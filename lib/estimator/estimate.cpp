@@ -178,9 +178,10 @@ Estimate invalid(const Rounds& rounds, const std::string& reason) {
   Estimate e;
   e.status = EstimateStatus::invalid_input;
   e.reason = reason;
-  for (int id : rounds.drones) e.drones.push_back(DronePose{id, 0.0, Eigen::Vector3d::Zero(), false});
-  for (int id : rounds.drones) e.unresolved.push_back(id);
   const double nan = std::nan("");
+  // No pose exists: NaN (written as null), not a made-up zero pose.
+  for (int id : rounds.drones) e.drones.push_back(DronePose{id, nan, Eigen::Vector3d::Constant(nan), false});
+  for (int id : rounds.drones) e.unresolved.push_back(id);
   e.certificate = Certificate{nan, nan, nan, nan, 0, nan};  // no SDP was solved: no bound either
   return e;
 }

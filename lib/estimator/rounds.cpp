@@ -41,18 +41,18 @@ std::string check_observation(const Observation& obs, size_t o) {
   if (e.empty()) e = check_scalar(obs.odom_yaw, at + "odom_yaw");
   if (e.empty()) e = check_vector(obs.vector, at + "vector");
   if (e.empty() && obs.odom_position.norm() > kMaxMetres)
-    e = at + "odom_position is " + number(obs.odom_position.norm()) + " m from the origin (more than " +
+    e = at + "odom_position is " + number(obs.odom_position.stableNorm()) + " m from the origin (more than " +
         number(kMaxMetres) + " m)";
   if (e.empty() && obs.vector.norm() > kMaxMetres)
-    e = at + "vector has length " + number(obs.vector.norm()) + " m (more than " + number(kMaxMetres) + " m)";
-  if (e.empty()) e = at + "vector has length " + number(obs.vector.norm()) + " m (a detection must point somewhere)";
+    e = at + "vector has length " + number(obs.vector.stableNorm()) + " m (more than " + number(kMaxMetres) + " m)";
+  if (e.empty()) e = at + "vector has length " + number(obs.vector.stableNorm()) + " m (a detection must point somewhere)";
   return e;
 }
 
 std::string check_drone(const DroneRound& d) {
   std::string e = check_vector(d.position, "position");
   if (e.empty() && d.position.norm() > kMaxMetres)
-    e = "position is " + number(d.position.norm()) + " m from the origin (more than " + number(kMaxMetres) + " m)";
+    e = "position is " + number(d.position.stableNorm()) + " m from the origin (more than " + number(kMaxMetres) + " m)";
   if (e.empty()) e = check_scalar(d.yaw, "yaw");
   for (size_t o = 0; e.empty() && o < d.observations.size(); ++o) e = check_observation(d.observations[o], o);
   return e;
@@ -67,7 +67,15 @@ std::string validate_rounds(const Rounds& rounds) {
       return "drones[" + std::to_string(i) + "]: id " + std::to_string(rounds.drones[i]) + " is listed twice";
   }
   if (ids.size() < 2) return "drones: " + std::to_string(ids.size()) + " drone(s) listed, at least 2 are needed";
+  if (ids.size() > static_cast<size_t>(kMaxDrones))
+    return "drones: " + std::to_string(ids.size()) + " drones listed, at most " + std::to_string(kMaxDrones) +
+           " are supported";
   if (rounds.rounds.empty()) return "rounds: no rounds";
+  for (size_t k = 1; k < rounds.rounds.size(); ++k)
+    if (rounds.rounds[k].index <= rounds.rounds[k - 1].index)
+      return "round " + std::to_string(k) + ": index " + std::to_string(rounds.rounds[k].index) +
+             " is not above round " + std::to_string(k - 1) + "'s index " + std::to_string(rounds.rounds[k - 1].index) +
+             " (rounds must be listed in the order they were observed)";
   for (size_t k = 0; k < rounds.rounds.size(); ++k) {
     const Round& round = rounds.rounds[k];
     const auto at = [&] { return "round " + std::to_string(k) + " (index " + std::to_string(round.index) + "): "; };

@@ -578,4 +578,20 @@ std::string truth_to_json(const Truth& truth) {
   return dump(doc);
 }
 
+std::vector<Eigen::Vector3d> positions_from_json(const std::string& text) {
+  const Json doc = parse_text(text);
+  expect_array(doc, "");
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t i = 0; i < doc.size(); ++i) out.push_back(vec3(doc[i], element("", i)));
+  return out;
+}
+
+std::vector<Obstacle> obstacles_from_json(const std::string& text) {
+  const Json doc = parse_text(text);
+  expect_array(doc, "");
+  std::vector<Obstacle> out;
+  for (std::size_t i = 0; i < doc.size(); ++i) out.push_back(read_obstacle(doc[i], element("", i)));
+  return out;
+}
+
 }  // namespace fact

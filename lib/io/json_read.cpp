@@ -63,12 +63,18 @@ std::string describe(double x) { return describe(Json(x)); }
 // Follows the parser through the document so that (1) a key repeated within one object, which
 // nlohmann would silently resolve by keeping the last value, is an error naming its path, and
 // (2) a syntax error or an out-of-range number (1e999) can be reported near the path where it
-// happened.
+// happened; (3) a document nested deeper than kMaxDepth is refused (no format here nests more
+// than 5 levels, and printing or destroying a 100 000-level value recursed until the stack
+// overflowed: review, session 32).
 namespace {
+constexpr std::size_t kMaxDepth = 64;
+
 class PathTracker {
  public:
   bool on_event(Json::parse_event_t event, const Json& parsed) {
     using Event = Json::parse_event_t;
+    if ((event == Event::object_start || event == Event::array_start) && levels_.size() >= kMaxDepth)
+      fail(path(), "nested deeper than " + std::to_string(kMaxDepth) + " levels");
     switch (event) {
       case Event::object_start: levels_.push_back({false, 0, "", {}}); break;
       case Event::array_start: levels_.push_back({true, 0, "", {}}); break;

@@ -26,7 +26,9 @@
 //                                    "observations": [{"odom_position": [x,y,z], "odom_yaw": r,
 //                                                      "vector": [x,y,z]}, ...]}}}]}
 //   Every key of a round's "drones" must be listed in "drones"; "observations" may be empty.
-//   The semantics (at least two drones, non-zero vectors, …) are validate_rounds' job.
+//   The semantics (2 … kMaxDrones drones, non-zero vectors, "index" strictly increasing: the
+//   last round is the latest, …) are validate_rounds' job. Every reader refuses a document
+//   nested deeper than 64 levels and a key repeated within one object.
 //
 // fact-result-v1:
 //   {"format": "fact-result-v1", "mode": "paper|complex|associated|auto",
@@ -76,5 +78,11 @@ std::string estimate_to_json(const Estimate& estimate);
 
 Truth truth_from_json(const std::string& text);
 std::string truth_to_json(const Truth& truth);
+
+// fact-simgen's input files, read with the same checks (paths in errors, duplicate keys, depth):
+// a JSON array of [x, y, z] positions (m), and a JSON array of obstacles as in the truth file
+// ({"center": [x, y, z], "radius": r, "height": h}, m).
+std::vector<Eigen::Vector3d> positions_from_json(const std::string& text);
+std::vector<Obstacle> obstacles_from_json(const std::string& text);
 
 }  // namespace fact

@@ -40,8 +40,13 @@ struct Rounds {
   std::vector<Round> rounds;  // in order
 };
 
-// Checks the data a decoder produced: ids unique and known, every number finite, at least two
-// drones. Returns "" when usable, otherwise one line naming the round, the drone, the field and
+// The most drones one estimate takes (the gossip tracks 32; beyond a few hundred the association
+// search and the SDP grow past any flight's budget, and a file listing 200 000 ids took 20 GB
+// before failing: review, session 32).
+constexpr int kMaxDrones = 256;
+
+// Checks the data a decoder produced: ids unique and known, every number finite, 2 … kMaxDrones
+// drones, round indexes strictly increasing (the last round is the latest). Returns "" when usable, otherwise one line naming the round, the drone, the field and
 // the value, e.g. "round 2 (index 2): drone 5: observations[1].vector[0] is nan".
 std::string validate_rounds(const Rounds& rounds);
 
