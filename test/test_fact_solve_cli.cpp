@@ -436,4 +436,28 @@ TEST_F(FactSolveCli, AFailedWriteLeavesThePreviousFileWhole) {
   EXPECT_EQ(read_file(path), "new\n");
   EXPECT_EQ(fact::write_file_atomically("/dev/null", "discarded\n"), "");  // a device is written in place
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  // A symbolic link stays a link; its file gets the text and keeps its mode (review, session 32:
+  // the link was replaced by a new 0644 file, and /dev/stdout by a regular file, as root).
+  write_file(file("target.json"), "old\n");
+  fs::permissions(file("target.json"), fs::perms::owner_read | fs::perms::owner_write);
+  fs::create_symlink(file("target.json"), file("link.json"));
+  EXPECT_EQ(fact::write_file_atomically(file("link.json").string(), "via the link\n"), "");
+  EXPECT_TRUE(fs::is_symlink(file("link.json")));
+  EXPECT_EQ(read_file(file("target.json")), "via the link\n");
+  EXPECT_EQ(fs::status(file("target.json")).permissions() & fs::perms::all, fs::perms::owner_read | fs::perms::owner_write);
+  ASSERT_TRUE(fs::is_symlink("/dev/stdout"));
+  const pid_t writer = fork();
+  ASSERT_GE(writer, 0);
+  if (writer == 0) {  // stdout redirected to a file, as `fact-solve --output /dev/stdout > f` does
+    const int fd = ::open(file("stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    _exit(fact::write_file_atomically("/dev/stdout", "to stdout\n").empty() ? 0 : 1);
+  }
+  ASSERT_EQ(waitpid(writer, &status, 0), writer);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_TRUE(fs::is_symlink("/dev/stdout")) << "/dev/stdout was replaced";
+  EXPECT_EQ(read_file(file("stdout.txt")), "to stdout\n");
+  // One file under two spellings, before it exists.
+  EXPECT_TRUE(fact::same_file(file("new.json").string(), (dir_ / "." / "new.json").string()));
+  EXPECT_FALSE(fact::same_file(file("new.json").string(), file("other.json").string()));
 }

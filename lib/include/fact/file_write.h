@@ -5,14 +5,17 @@
 
 namespace fact {
 
-// Writes `text` to `path` as a whole: into "<path>.partial-<pid>" in the same directory, flushed
-// to the disk (fsync), then renamed over `path`. A failed write (a full disk, an unwritable
-// directory) leaves `path` as it was (an earlier result is not lost) and removes the partial file.
-// A path that exists and is not a regular file (/dev/stdout, /dev/null, a FIFO) is written in
-// place: renaming over a device would replace it. Returns "" or the reason, naming the path.
+// Writes `text` to `path` as a whole: into a fresh "<file>.partial-XXXXXX" (mkstemp) beside the
+// file, flushed to the disk (fsync), given the old file's mode and owner, then renamed over it.
+// A failed write (a full disk, an unwritable directory) leaves the file as it was (an earlier
+// result is not lost) and removes the partial file. A symbolic link is followed to its regular
+// file (the link stays); a path that is not a regular file (/dev/stdout, /dev/null, a pipe) is
+// written in place, since renaming over it would replace it. A hard link to the old file keeps
+// the old contents. Returns "" or the reason, naming the path.
 std::string write_file_atomically(const std::string& path, const std::string& text);
 
-// Whether two paths name the same existing file (same device and inode), or are the same text.
+// Whether two paths name the same file: the same device and inode when both exist, else the same
+// path once made absolute and normalised ("a.json" and "./a.json").
 bool same_file(const std::string& a, const std::string& b);
 
 }  // namespace fact
