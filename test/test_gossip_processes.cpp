@@ -17,7 +17,9 @@
 #include "fact/app_status_t.hpp"
 #include "fact/detections_t.hpp"
 #include "fact/gossip.h"
+#include "fact/gossip_challenge_t.hpp"
 #include "fact/gossip_packet_t.hpp"
+#include "fact/gossip_summary_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "fact/round_packet_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
@@ -462,6 +464,65 @@ TEST_F(GossipProcesses, BadTimesAndCountsExitTwoNamingTheFlag) {
     const std::string text = tail(log, 5);
     EXPECT_NE(text.find(reason), std::string::npos) << text;
   }
+}
+
+// A challenge to fact-gossip whose envelope screens as a replay (the challenger's numbers are
+// below what the gossip holds of it) is still answered, at most once a second per challenger: two
+// drones that each hold the other's old numbers otherwise refused each other's challenges until
+// their clocks passed the old numbers (review, session 32). The test process is drone 1, with the
+// swarm key: it raises drone 2's window for drone 1, then challenges it with lower numbers.
+TEST_F(GossipProcesses, AChallengeIsAnsweredEvenWhenItsNumbersAreOld) {
+  const std::string url = drone_url(7);
+  ASSERT_EQ(fact::app::init_crypto(), "");
+  fact::app::SwarmKey key;
+  ASSERT_EQ(fact::app::load_key(dir_ + "/swarm.key", &key), "");
+  lcm::LCM bus(url);
+  ASSERT_TRUE(bus.good());
+  struct Answers {
+    std::vector<fact::gossip_challenge_t> got;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      fact::gossip_packet_t env;
+      fact::gossip_challenge_t m;
+      if (env.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) > 0 && env.sender_id == 2 &&
+          env.kind == fact::gossip_packet_t::RESPONSE && m.decode(env.payload.data(), 0, env.payload_size) > 0)
+        got.push_back(m);
+    }
+  } answers;
+  bus.subscribe("FACT_GOSSIP", &Answers::on, &answers);
+  Processes procs;
+  procs.start("gossip2", {FACT_GOSSIP_BINARY, "--drone-id", "2", "--lcm-url", url, "--key-file", dir_ + "/swarm.key",
+                          "--rounds-from-channel", "--status-period", "0.2"},
+              log_);
+  std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(fact::test::scaled_s(0.5) * 1000)));
+  const int64_t high = now_us();
+  fact::gossip_summary_t summary{};  // (every count 0)
+  summary.utime = high;
+  summary.drone_id = 1;
+  const fact::gossip_packet_t first = fact::app::make_envelope(1, high, fact::gossip_packet_t::SUMMARY,
+                                                               fact::app::encode_bytes(summary), high, key);
+  bus.publish("FACT_GOSSIP", &first);
+  const auto challenge = [&](int64_t seq, uint8_t tag) {
+    fact::gossip_challenge_t c;
+    c.utime = now_us();
+    c.peer_id = 2;
+    for (int k = 0; k < 16; ++k) c.nonce[k] = static_cast<uint8_t>(tag + k);
+    const fact::gossip_packet_t env =
+        fact::app::make_envelope(1, seq, fact::gossip_packet_t::CHALLENGE, fact::app::encode_bytes(c), c.utime, key);
+    bus.publish("FACT_GOSSIP", &env);
+  };
+  const auto pump = [&](double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+    while (std::chrono::steady_clock::now() < end) bus.handleTimeout(10);
+  };
+  pump(0.2);
+  const int64_t low = high - 3600000000LL;  // drone 1 "restarted with its clock an hour back"
+  for (int i = 0; i < 5; ++i) challenge(low + i, static_cast<uint8_t>(40 + i));  // five at once: one answer
+  pump(fact::test::scaled_s(0.6));
+  ASSERT_EQ(answers.got.size(), 1u) << "the challenge with old numbers was not answered once";
+  EXPECT_EQ(answers.got[0].peer_id, 1);
+  EXPECT_EQ(answers.got[0].nonce[0], 40);
+  EXPECT_EQ(answers.got[0].nonce[15], 40 + 15);
+  for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
 }
 
 // fact-fault-relay: a channel that two --channel patterns match is forwarded once (two
