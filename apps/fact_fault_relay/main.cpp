@@ -19,8 +19,9 @@
 // 2 s would be taken for an echo; gossip envelopes never repeat (each carries a new sequence
 // number), so only true duplicates are affected.
 //
-// --channel values are LCM channel regexes (POSIX extended, matching whole names); they are joined
-// into one subscription per side, so a channel that two patterns match is forwarded once (two
+// --channel values are LCM channel regexes (GLib's, as LCM compiles them, matching whole names);
+// they are joined as (?:(?:A)|(?:B)…) into one subscription per side, so a channel that two
+// patterns match is forwarded once (two
 // subscriptions forwarded it twice, and each copy's echo was absorbed once: the copies bounced
 // between the buses for ever; review, session 32). Hold-backs and echo memory run on the
 // monotonic clock (a wall-clock step must not hold messages for the step).
@@ -31,8 +32,8 @@
 #include "common/uint64_flag.h"
 
 #include <CLI/CLI.hpp>
+#include <glib.h>
 #include <lcm/lcm-cpp.hpp>
-#include <regex.h>
 
 
 #include <algorithm>
@@ -111,8 +112,8 @@ class Relay {
   // One subscription per side for every pattern together; false when LCM refuses it.
   bool subscribe() {
     std::string all;
-    for (const std::string& c : f_.channels) all += (all.empty() ? "(" : "|(") + c + ")";
-    all = "(" + all + ")";
+    for (const std::string& c : f_.channels) all += (all.empty() ? "(?:" : "|(?:") + c + ")";
+    all = "(?:" + all + ")";  // (LCM anchors it as ^…$)
     return lcm_[kDrone]->subscribe(all, &Relay::from_drone, this) != nullptr &&
            lcm_[kSwarm]->subscribe(all, &Relay::from_swarm, this) != nullptr;
   }
@@ -246,11 +247,15 @@ std::string flags_error(const Flags& f) {
   if (f.drone_id < -1) return "--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id);
   if (f.status_channel.empty()) return "--status-channel: empty";
   for (const std::string& c : f.channels) {
-    regex_t re;
     if (c.empty()) return "--channel: an empty pattern";
-    if (regcomp(&re, ("^(" + c + ")$").c_str(), REG_EXTENDED | REG_NOSUB) != 0)
-      return "--channel " + c + ": not a valid channel regex (POSIX extended)";
-    regfree(&re);
+    // Compiled as LCM will (GRegex, anchored): LCM only prints its error and forwards nothing.
+    GError* error = nullptr;
+    GRegex* re = g_regex_new(("^(?:" + c + ")$").c_str(), static_cast<GRegexCompileFlags>(0),
+                             static_cast<GRegexMatchFlags>(0), &error);
+    const std::string why = error != nullptr ? error->message : "";
+    if (error != nullptr) g_error_free(error);
+    if (re != nullptr) g_regex_unref(re);
+    if (!why.empty()) return "--channel " + c + ": not a valid channel regex: " + why;
   }
   return "";
 }
@@ -300,7 +305,7 @@ int main(int argc, char** argv) {
   Relay relay(f, &drone, &swarm);
   if (!relay.subscribe()) {
     boot.event("error: LCM refused the subscription to the --channel patterns");
-    return 2;
+    return 1;
   }
   relay.log().event("started: " + f.drone_url + " <-> " + f.swarm_url + ", drop " + std::to_string(f.drop) + ", dup " +
                     std::to_string(f.dup) + ", reorder " + std::to_string(f.reorder) + " (faults " + f.faults +
