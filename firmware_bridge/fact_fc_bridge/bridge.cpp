@@ -129,11 +129,13 @@ void Bridge::on_setpoint(const fact::setpoint_t& sp, const std::string& channel,
   status_->count("setpoints_received");
   std::string counter;
   std::string why = check_setpoint(sp, &counter);
-  const int64_t skew = stamp_clock - sp.utime;  // > 0: stamped in the past
-  if (why.empty() && o_.max_stamp_skew_us > 0 && (skew > o_.max_stamp_skew_us || skew < -o_.max_stamp_skew_us)) {
+  // (compared without subtracting: a utime near INT64_MIN would overflow the difference)
+  const int64_t m = o_.max_stamp_skew_us;
+  if (why.empty() && m > 0 && (sp.utime < stamp_clock - m || sp.utime > stamp_clock + m)) {
+    const double skew = static_cast<double>(stamp_clock) - static_cast<double>(sp.utime);  // > 0: in the past
     counter = "rejected_stale";
     why = "setpoint utime = " + std::to_string(sp.utime) + " is " + num(std::abs(skew) * 1e-6) + " s " +
-          (skew > 0 ? "old" : "ahead of this clock") + " (at most " + num(o_.max_stamp_skew_us * 1e-6) +
+          (skew > 0 ? "old" : "ahead of this clock") + " (at most " + num(m * 1e-6) +
           " s: a replayed log or a stuck publisher)";
   }
   if (!why.empty()) {
