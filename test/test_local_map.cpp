@@ -179,7 +179,8 @@ TEST(LocalMap, TheGridFollowsTheDrone) {
     const fact::ObstacleBox b = map.bounds();
     EXPECT_LT(b.lo.x(), x - 5);
     EXPECT_GT(b.hi.x(), x + 5);
-    EXPECT_EQ(recentred > 0, x > 6.8) << x;  // (the drone stays within 12 − 5 − 0.2 m of the centre)
+    // (the drone stays within 12 − 1.48 · 5 − 0.2 = 4.4 m of the centre: 1.48 is the D430's widest ray)
+    EXPECT_EQ(recentred > 0, x > 4.4) << x;
     const auto pieces = map.pieces();
     ASSERT_FALSE(pieces.empty()) << "no obstacle seen at x = " << x;
     EXPECT_LE(distance_to_pieces(pieces, Vector3d(x + 1.5, 0, 1.5)), 0.2 * std::sqrt(3.0)) << x;
@@ -236,10 +237,6 @@ TEST(LocalMap, BadInputNamed) {
   fact::LocalMapParams bad;
   bad.resolution = 0;
   EXPECT_NE(fact::local_map_params_error(bad).find("resolution"), std::string::npos);
-  bad = {};
-  bad.half_extent_xy = 5;  // smaller than what a frame sees
-  EXPECT_NE(fact::local_map_params_error(bad).find("half_extent_xy = 5.000000 m must exceed max_range + resolution"),
-            std::string::npos);
   mp.position.x() = 1e7;
   EXPECT_EQ(map.add_frame(v, {}, mp, {}), "pose.position is beyond 1e6 m");
 }

@@ -487,6 +487,16 @@ TEST_F(PlannerApp, FollowsAnOdometryRestart) {
   EXPECT_EQ(p.stop(), 0);
 }
 
+// A map range beyond the default grid's margin is taken (the grid grows with it): a check added in
+// session 32 refused --map-max-range 11.8 and above, naming a field that has no flag (review).
+TEST_F(PlannerApp, ALongMapRangeIsTaken) {
+  World w;
+  ASSERT_TRUE(w.good());
+  Process& p = start({"--map-max-range", "12"});
+  ASSERT_TRUE(w.run([&] { return starts_with(w.state, "takeoff"); }, std::chrono::seconds(5))) << w.state << p.err();
+  EXPECT_EQ(p.stop(), 0);
+}
+
 // Complete rounds fewer than those already taken (a restarted fact-gossip) are counted and logged,
 // not silently dropped (review, session 32).
 TEST_F(PlannerApp, FewerCompleteRoundsThanTakenAreCountedAndLogged) {

@@ -155,6 +155,9 @@ void check(Options& o) {
   if (!std::isfinite(o.camera_pitch)) throw FlagError("--camera-pitch: expected a finite number");
   for (int k = 0; k < 4; ++k) o.planner.fence[static_cast<std::size_t>(k)] = o.fence[static_cast<std::size_t>(k)];
   if (std::string e = fact::planner_params_error(o.planner); !e.empty()) throw FlagError("planner: " + e);
+  // The map's grid (±12 m) grows with --map-max-range so that it holds a whole frame's reach on
+  // each side of the drone (1.5 × max range covers a D430's widest ray, 1.48 ×), plus 2 m.
+  if (std::isfinite(o.map.max_range)) o.map.half_extent_xy = std::max(o.map.half_extent_xy, 1.5 * o.map.max_range + 2.0);
   if (std::string e = fact::local_map_params_error(o.map); !e.empty()) throw FlagError("map: " + e);
 }
 

@@ -16,9 +16,7 @@ std::string local_map_params_error(const LocalMapParams& p) {
   if (!(p.resolution > 0.01 && p.resolution <= 1)) return bad("resolution (0.01 … 1 m)", p.resolution);
   if (!(p.z_max > p.z_min) || !std::isfinite(p.z_min) || !std::isfinite(p.z_max)) return bad("z_max", p.z_max);
   if (!(p.min_range >= 0) || !(p.max_range > p.min_range) || !std::isfinite(p.max_range)) return bad("max_range", p.max_range);
-  if (!(p.half_extent_xy > p.max_range + p.resolution) || !std::isfinite(p.half_extent_xy))
-    return "half_extent_xy = " + std::to_string(p.half_extent_xy) + " m must exceed max_range + resolution = " +
-           std::to_string(p.max_range + p.resolution) + " m (the grid must hold what a frame sees)";
+  if (!(p.half_extent_xy > p.resolution) || !std::isfinite(p.half_extent_xy)) return bad("half_extent_xy", p.half_extent_xy);
   if (!std::isfinite(p.floor_height)) return bad("floor_height", p.floor_height);
   if (p.hit_threshold < 1 || p.hit_threshold > 60000) return bad("hit_threshold", p.hit_threshold);
   if (p.pixel_step < 1) return bad("pixel_step", p.pixel_step);
@@ -92,7 +90,12 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
       std::fill(mask_.begin() + v * W + static_cast<int>(u0), mask_.begin() + v * W + static_cast<int>(u1) + 1, 1);
   }
   // p_f = R_fc · p_c + t_fc; R_fc (3×3) = attitude · R_body_cam, t_fc (3) = attitude · t_body_cam + position.
-  const int forgotten = follow(pose.position);
+  // The farthest a mapped point can be from the drone: max_range along the widest ray (a corner's
+  // (u, v, 1) is longer than the optical axis: 1.48× for a D430) plus the camera's offset.
+  const double rx = std::max(std::abs(ray_x_.front()), std::abs(ray_x_.back()));
+  const double ry = std::max(std::abs(ray_y_.front()), std::abs(ray_y_.back()));
+  const double reach = params_.max_range * std::sqrt(rx * rx + ry * ry + 1) + extrinsics.t_body_cam.norm();
+  const int forgotten = follow(pose.position, reach);
   const Eigen::Matrix3d att = body_attitude(pose.yaw, pose.pitch, pose.roll);
   const Eigen::Matrix3f R = (att * extrinsics.R_body_cam).cast<float>();
   const Eigen::Vector3f t = (att * extrinsics.t_body_cam + pose.position).cast<float>();
@@ -147,14 +150,16 @@ std::string LocalMap::add_frame(const FrameView& frame, const CameraExtrinsics& 
   return "";
 }
 
-int LocalMap::follow(const Eigen::Vector3d& p) {
+int LocalMap::follow(const Eigen::Vector3d& p, double reach) {
   const double half = 0.5 * nx_ * params_.resolution;  // (nx_ = ny_)
   const Eigen::Vector2d centre = origin_.head<2>() + Eigen::Vector2d::Constant(half);
-  const double keep = half - params_.max_range - params_.resolution;  // > 0 (local_map_params_error)
+  // (keep ≤ 0: a grid smaller than a frame's reach re-centres whenever the drone moves a voxel)
+  const double keep = half - reach - params_.resolution;
   if ((p.head<2>() - centre).cwiseAbs().maxCoeff() <= keep) return -1;
   // Shift by whole voxels: new voxel (ix, iy) is old voxel (ix + sx, iy + sy).
   const int sx = static_cast<int>(std::lround((p.x() - centre.x()) / params_.resolution));
   const int sy = static_cast<int>(std::lround((p.y() - centre.y()) / params_.resolution));
+  if (sx == 0 && sy == 0) return -1;
   const uint16_t thr = static_cast<uint16_t>(params_.hit_threshold);
   std::vector<uint16_t> moved(hits_.size(), 0);
   int kept = 0;

@@ -4,9 +4,11 @@
 // below the floor height are ignored; the rest are counted in a voxel grid. A voxel hit at least
 // `hit_threshold` times is occupied (single noisy returns are rejected). Occupied voxels are merged
 // greedily into axis-aligned boxes: the convex obstacle pieces the planner's safety checks use.
-// The grid follows the drone: when a frame's pose comes closer than max_range + resolution to the
-// grid's horizontal edge, the grid is re-centred on the drone (shifted by whole voxels; what falls
-// outside is forgotten), so every point a frame can see lies inside it. Beyond bounds() nothing is
+// The grid follows the drone: when a frame's pose comes closer than the frame's reach (max_range
+// along the camera's widest ray, plus the camera's offset) + resolution to the grid's horizontal
+// edge, the grid is re-centred on the drone (shifted by whole voxels; what falls outside is
+// forgotten), so every point the frame can map lies inside it when the grid is wider than twice
+// that reach (fact-planner sizes it so). Beyond bounds() nothing is
 // known: the planner keeps its moves inside (review, session 32: a grid fixed at ±12 m of the
 // takeoff spot dropped every obstacle beyond, and the planner moved through them).
 //
@@ -45,7 +47,7 @@ double box_distance(const ObstacleBox& b, const Eigen::Vector3d& p);
 struct LocalMapParams {
   double resolution = 0.2;       // m, voxel edge
   double half_extent_xy = 12.0;  // m, the grid covers x, y within half_extent_xy of its centre (first
-                                 // the takeoff spot, then the drone: see the header); > max_range + resolution
+                                 // the takeoff spot, then the drone: see the header)
   double z_min = -1.0;           // m, grid bottom in f_i
   double z_max = 5.0;            // m, grid top in f_i
   double min_range = 0.25;       // m, optical z below this is ignored
@@ -100,9 +102,9 @@ class LocalMap {
   CameraIntrinsics rays_for_;
   std::vector<uint8_t> mask_;     // per pixel: 1 inside a dilated drone box (scratch)
 
-  // Re-centres the grid on p (f_i) when p is too near its horizontal edge; the occupied voxels
-  // forgotten, or −1 when it stayed.
-  int follow(const Eigen::Vector3d& p);
+  // Re-centres the grid on p (f_i) when p is nearer than reach + resolution (m) to its horizontal
+  // edge; the occupied voxels forgotten, or −1 when it stayed.
+  int follow(const Eigen::Vector3d& p, double reach);
 };
 
 }  // namespace fact
