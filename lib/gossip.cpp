@@ -254,7 +254,8 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
   const uint64_t w = static_cast<uint64_t>(opt_.replay_window);
   if (n->seq_seen.empty()) n->seq_seen.assign((w + 63) / 64, 0);
   if (n->stale && seq > n->seq_high && static_cast<uint64_t>(seq) - static_cast<uint64_t>(n->seq_high) > w &&
-      seq >= n->stale_low && seq <= n->stale_high) {  // a number of the run before the sender's renumbering
+      seq <= n->stale_high) {  // a number of the run before the sender's renumbering (or a jump over
+                               // the window into its range: one more challenge takes it back)
     ++counters_.replayed;
     return Screen::replay;
   }
@@ -271,7 +272,6 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
         n->seq_seen[word] &= ~mask;
       }
     }
-    if (!n->seq_init) n->seq_low = seq;
     n->seq_init = true;
     n->seq_high = seq;
     if (n->stale && seq > n->stale_high) n->stale = false;  // the new numbers passed the old ones
@@ -288,7 +288,6 @@ Screen Gossip::screen_envelope(int64_t now, int sender, int64_t seq) {
   }
   auto [word, mask] = bit(seq);
   n->seq_seen[word] |= mask;
-  n->seq_low = std::min(n->seq_low, seq);
   hear(sender, now);
   return Screen::accept;
 }
@@ -314,11 +313,9 @@ bool Gossip::answer_challenge(int64_t now, int sender, int64_t seq, const Nonce&
   }
   n->challenged = false;
   if (seq < n->seq_high) {  // the previous run's numbers above the new window stay refused
-    n->stale_low = n->stale ? std::min(n->stale_low, n->seq_low) : n->seq_low;
     n->stale_high = n->stale ? std::max(n->stale_high, n->seq_high) : n->seq_high;
     n->stale = true;
   }
-  n->seq_low = seq;
   event("drone " + std::to_string(sender) + " answered a challenge: its envelope numbers restart at " +
         std::to_string(seq) + " (they were up to " + std::to_string(n->seq_high) +
         ": restarted with its clock set back)");

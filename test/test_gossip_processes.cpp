@@ -467,7 +467,7 @@ TEST_F(GossipProcesses, BadTimesAndCountsExitTwoNamingTheFlag) {
 }
 
 // A challenge to fact-gossip whose envelope screens as a replay (the challenger's numbers are
-// below what the gossip holds of it) is still answered, at most once a second per challenger: two
+// below what the gossip holds of it) is still answered, once per nonce: two
 // drones that each hold the other's old numbers otherwise refused each other's challenges until
 // their clocks passed the old numbers (review, session 32). The test process is drone 1, with the
 // swarm key: it raises drone 2's window for drone 1, then challenges it with lower numbers.
@@ -516,12 +516,15 @@ TEST_F(GossipProcesses, AChallengeIsAnsweredEvenWhenItsNumbersAreOld) {
   };
   pump(0.2);
   const int64_t low = high - 3600000000LL;  // drone 1 "restarted with its clock an hour back"
-  for (int i = 0; i < 5; ++i) challenge(low + i, static_cast<uint8_t>(40 + i));  // five at once: one answer
+  challenge(low, 40);
+  for (int i = 1; i < 5; ++i) challenge(low + i, 40);  // the same challenge replayed: not answered again
+  challenge(low + 5, 41);                               // a new nonce: answered
   pump(fact::test::scaled_s(0.6));
-  ASSERT_EQ(answers.got.size(), 1u) << "the challenge with old numbers was not answered once";
+  ASSERT_EQ(answers.got.size(), 2u) << "the challenges with old numbers were not answered once per nonce";
   EXPECT_EQ(answers.got[0].peer_id, 1);
   EXPECT_EQ(answers.got[0].nonce[0], 40);
   EXPECT_EQ(answers.got[0].nonce[15], 40 + 15);
+  EXPECT_EQ(answers.got[1].nonce[0], 41);
   for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
 }
 

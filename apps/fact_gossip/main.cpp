@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -317,7 +318,8 @@ class GossipApp {
 
   // An authenticated envelope numbered below its sender's window: the answer to our challenge
   // (RESPONSE, its numbers restart), or a reason to challenge the sender (logged). A CHALLENGE to
-  // this drone is answered too, at most once a second per challenger: two drones that each hold
+  // this drone is answered too, once per nonce (the last 16 of each challenger are remembered, so
+  // a replayed challenge cannot take the place of the real one): two drones that each hold
   // the other's old numbers (both restarted with their clocks set back, and a recording of one
   // played to the other) would otherwise refuse each other's challenges for ever (review,
   // session 32). Answering cannot renumber anyone: only the challenger's fresh nonce does.
@@ -326,9 +328,12 @@ class GossipApp {
     if (env.kind == fact::gossip_packet_t::CHALLENGE) {
       fact::gossip_challenge_t m;
       if (fact::app::decode_error(env.payload.data(), env.payload_size, &m).empty() && m.peer_id == f_.common.drone_id) {
-        auto [last, fresh] = last_answer_.try_emplace(env.sender_id, now);
-        if (fresh || now - last->second >= 1000000) {
-          last->second = now;
+        fact::gossip::Nonce nonce;
+        std::copy(std::begin(m.nonce), std::end(m.nonce), nonce.begin());
+        std::deque<fact::gossip::Nonce>& seen = answered_[env.sender_id];
+        if (std::find(seen.begin(), seen.end(), nonce) == seen.end()) {
+          seen.push_back(nonce);
+          if (seen.size() > 16) seen.pop_front();
           answer(env.sender_id, m);
         }
       }
@@ -437,7 +442,7 @@ class GossipApp {
   fact::gossip::Gossip gossip_;
   fact::gossip::RoundBuilder builder_;
   int64_t seq_;
-  std::map<int, int64_t> last_answer_;  // challenger → when its last challenge that screened as a replay was answered (µs)
+  std::map<int, std::deque<fact::gossip::Nonce>> answered_;  // challenger → nonces answered despite old numbers
   const int64_t first_seq_ = seq_;  // our first envelope's number (seq_ is the next one's)
   bool odometry_seen_ = false;
   int64_t odometry_seq_ = 0;        // the newest odometry sample's seq and utime (µs)

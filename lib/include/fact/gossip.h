@@ -39,9 +39,10 @@
 //      replays. The receiver then challenges it (open_challenge: a random nonce, at most one
 //      outstanding per sender, renewed after challenge_timeout); the sender answers with the nonce
 //      in an envelope of its new numbers, which a recording cannot forge, and answer_challenge
-//      restarts the sender's window at that number. The previous run's numbers (from the lowest
-//      to the highest seen) above the new window stay refused until the new numbers pass them, so
-//      replaying the old run after the restart does not lock the sender out again. A CHALLENGE to
+//      restarts the sender's window at that number. Numbers above the new window up to the
+//      highest seen stay refused until the new numbers pass them (so replaying the old run,
+//      including numbers sent before this receiver heard the sender, cannot lock the sender out
+//      again; a real jump over the window there costs one more challenge). A CHALLENGE to
 //      this drone is answered even when its envelope screens as a replay (rate-limited by the
 //      app), so two drones that each hold the other's old numbers take each other back.
 //    - Bounded memory: at most max_origins drone ids and max_rounds rounds per origin (rounds
@@ -279,9 +280,8 @@ class Gossip {
     bool seq_init = false;
     int64_t seq_high = 0;
     std::vector<uint64_t> seq_seen;           // bitmap of seq_high − replay_window + 1 … seq_high
-    int64_t seq_low = 0;                      // the lowest number accepted in this run
-    bool stale = false;                       // renumbered: numbers in [stale_low, stale_high] above
-    int64_t stale_low = 0, stale_high = 0;    //   seq_high + replay_window are the previous run's, refused
+    bool stale = false;                       // renumbered: numbers in (seq_high + replay_window,
+    int64_t stale_high = 0;                   //   stale_high] may be the previous run's: refused
     bool challenged = false;                  // a challenge is outstanding:
     Nonce challenge{};                        //   its nonce
     int64_t challenged_at = 0;                //   and when it was sent (µs)
