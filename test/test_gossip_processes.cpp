@@ -543,7 +543,8 @@ TEST_F(GossipProcesses, FaultRelayForwardsOnceAndRefusesUnusableFlags) {
   swarm_side.subscribe(".*", &Count::on, &arrived);
   Processes procs;
   procs.start("relay", {FACT_FAULT_RELAY_BINARY, "--drone-url", drone, "--swarm-url", swarm, "--channel", "FACT_GOSSIP",
-                        "--channel", "FACT_GOSSIP", "--channel", "FACT_.*", "--channel", "(?:FACT_GOSS)IP", "--faults",
+                        "--channel", "FACT_GOSSIP", "--channel", "FACT_.*", "--channel", "(?:FACT_GOSS)IP",
+                        "--channel", "(Y)\\1_CH", "--faults",
                         "both", "--status-channel", "RELAY_STATUS"},
               log_);
   std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(fact::test::scaled_s(0.5) * 1000)));
@@ -551,10 +552,12 @@ TEST_F(GossipProcesses, FaultRelayForwardsOnceAndRefusesUnusableFlags) {
   for (int i = 0; i < 3; ++i)
     drone_side.publish("FACT_GOSSIP", (bytes + std::to_string(i)).data(), static_cast<unsigned>(bytes.size() + 1));
   drone_side.publish("NOT_FACT_GOSSIP", bytes.data(), static_cast<unsigned>(bytes.size()));  // no pattern matches it whole
+  drone_side.publish("YY_CH", bytes.data(), static_cast<unsigned>(bytes.size()));  // a back-reference keeps its meaning
   const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(fact::test::scaled_s(1) * 1000));
   while (std::chrono::steady_clock::now() < end) swarm_side.handleTimeout(20);
   EXPECT_EQ(arrived.n["FACT_GOSSIP"], 3);
   EXPECT_EQ(arrived.n.count("NOT_FACT_GOSSIP"), 0u);
+  EXPECT_EQ(arrived.n["YY_CH"], 1);
   for (const auto& [name, code] : procs.stop_all()) EXPECT_EQ(code, 0) << name;
 
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {

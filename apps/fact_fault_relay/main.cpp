@@ -19,9 +19,10 @@
 // 2 s would be taken for an echo; gossip envelopes never repeat (each carries a new sequence
 // number), so only true duplicates are affected.
 //
-// --channel values are LCM channel regexes (GLib's, as LCM compiles them, matching whole names);
-// they are joined as (?:(?:A)|(?:B)…) into one subscription per side, so a channel that two
-// patterns match is forwarded once (two
+// --channel values are LCM channel regexes (GLib's, as LCM compiles them, matching whole names).
+// The relay subscribes once per side to every channel and forwards a message when any pattern,
+// compiled on its own, matches its channel: a channel that two patterns match is forwarded once
+// (two
 // subscriptions forwarded it twice, and each copy's echo was absorbed once: the copies bounced
 // between the buses for ever; review, session 32). Hold-backs and echo memory run on the
 // monotonic clock (a wall-clock step must not hold messages for the step).
@@ -109,13 +110,34 @@ class Relay {
     faulty_[kSwarm] = f.faults == "to-swarm" || f.faults == "both";
   }
 
-  // One subscription per side for every pattern together; false when LCM refuses it.
-  bool subscribe() {
-    std::string all;
-    for (const std::string& c : f_.channels) all += (all.empty() ? "(?:" : "|(?:") + c + ")";
-    all = "(?:" + all + ")";  // (LCM anchors it as ^…$)
-    return lcm_[kDrone]->subscribe(all, &Relay::from_drone, this) != nullptr &&
-           lcm_[kSwarm]->subscribe(all, &Relay::from_swarm, this) != nullptr;
+  ~Relay() {
+    for (GRegex* re : patterns_) g_regex_unref(re);
+  }
+
+  // Compiles the patterns (anchored, as LCM would) and subscribes once per side to every channel;
+  // "" or the pattern that does not compile. (Joining the patterns into one regex changed what
+  // back-references and named groups meant: review, session 32.)
+  std::string subscribe() {
+    for (const std::string& c : f_.channels) {
+      GError* error = nullptr;
+      GRegex* re = g_regex_new(("^(?:" + c + ")$").c_str(), static_cast<GRegexCompileFlags>(0),
+                               static_cast<GRegexMatchFlags>(0), &error);
+      if (re == nullptr) {
+        const std::string why = error != nullptr ? error->message : "not a regex";
+        if (error != nullptr) g_error_free(error);
+        return "--channel " + c + ": not a valid channel regex: " + why;
+      }
+      patterns_.push_back(re);
+    }
+    lcm_[kDrone]->subscribe(".*", &Relay::from_drone, this);
+    lcm_[kSwarm]->subscribe(".*", &Relay::from_swarm, this);
+    return "";
+  }
+
+  bool wanted(const std::string& channel) const {
+    for (GRegex* re : patterns_)
+      if (g_regex_match(re, channel.c_str(), static_cast<GRegexMatchFlags>(0), nullptr)) return true;
+    return false;
   }
 
   const fact::app::Log& log() const { return log_; }
@@ -166,6 +188,7 @@ class Relay {
   }
 
   void forward(Side from, Side to, const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    if (!wanted(channel)) return;
     const int64_t now = monotonic_us();
     forget_old_echoes(now);
     const uint64_t key = fnv(channel, rbuf->data, rbuf->data_size) ^ static_cast<uint64_t>(from);
@@ -219,6 +242,7 @@ class Relay {
   std::multimap<int64_t, Held> held_;
   std::unordered_map<uint64_t, int> echoes_;
   std::deque<std::pair<int64_t, uint64_t>> echo_order_;
+  std::vector<GRegex*> patterns_;  // --channel, compiled
 };
 
 // The bus a URL names, for telling whether two URLs are one bus: "" is LCM's default; options
@@ -246,17 +270,8 @@ std::string flags_error(const Flags& f) {
     return "--status-period: expected a number in [0.001, 3600] s, got " + std::to_string(f.status_period);
   if (f.drone_id < -1) return "--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id);
   if (f.status_channel.empty()) return "--status-channel: empty";
-  for (const std::string& c : f.channels) {
-    if (c.empty()) return "--channel: an empty pattern";
-    // Compiled as LCM will (GRegex, anchored): LCM only prints its error and forwards nothing.
-    GError* error = nullptr;
-    GRegex* re = g_regex_new(("^(?:" + c + ")$").c_str(), static_cast<GRegexCompileFlags>(0),
-                             static_cast<GRegexMatchFlags>(0), &error);
-    const std::string why = error != nullptr ? error->message : "";
-    if (error != nullptr) g_error_free(error);
-    if (re != nullptr) g_regex_unref(re);
-    if (!why.empty()) return "--channel " + c + ": not a valid channel regex: " + why;
-  }
+  for (const std::string& c : f.channels)
+    if (c.empty()) return "--channel: an empty pattern";  // (each is compiled by Relay::subscribe)
   return "";
 }
 
@@ -303,9 +318,9 @@ int main(int argc, char** argv) {
   }
   fact::app::install_stop_handler();
   Relay relay(f, &drone, &swarm);
-  if (!relay.subscribe()) {
-    boot.event("error: LCM refused the subscription to the --channel patterns");
-    return 1;
+  if (const std::string e = relay.subscribe(); !e.empty()) {
+    boot.event("error: " + e);
+    return 2;
   }
   relay.log().event("started: " + f.drone_url + " <-> " + f.swarm_url + ", drop " + std::to_string(f.drop) + ", dup " +
                     std::to_string(f.dup) + ", reorder " + std::to_string(f.reorder) + " (faults " + f.faults +
