@@ -448,16 +448,21 @@ TEST_F(FactSolveCli, AFailedWriteLeavesThePreviousFileWhole) {
   ASSERT_TRUE(fs::is_symlink("/dev/stdout"));
   const pid_t writer = fork();
   ASSERT_GE(writer, 0);
-  if (writer == 0) {  // stdout redirected to a file, as `fact-solve --output /dev/stdout > f` does
-    const int fd = ::open(file("stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (writer == 0) {  // stdout appended to a file, as `(…; fact-solve --output /dev/stdout) >> f` does
+    const int fd = ::open(file("stdout.txt").c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     ::dup2(fd, 1);
-    _exit(fact::write_file_atomically("/dev/stdout", "to stdout\n").empty() ? 0 : 1);
+    fs::create_symlink("/proc/self/fd/1", file("myout"));  // a link of one's own to the output
+    const bool ok = ::write(1, "before\n", 7) == 7 && fact::write_file_atomically("/dev/stdout", "to stdout\n").empty() &&
+                    fact::write_file_atomically(file("myout").string(), "via a link\n").empty() && ::write(1, "after\n", 6) == 6;
+    _exit(ok ? 0 : 1);
   }
   ASSERT_EQ(waitpid(writer, &status, 0), writer);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
   EXPECT_TRUE(fs::is_symlink("/dev/stdout")) << "/dev/stdout was replaced";
-  EXPECT_EQ(read_file(file("stdout.txt")), "to stdout\n");
+  // Written in place: the lines before and after are still there (the output file was not replaced).
+  EXPECT_EQ(read_file(file("stdout.txt")), "before\nto stdout\nvia a link\nafter\n");
   // One file under two spellings, before it exists.
   EXPECT_TRUE(fact::same_file(file("new.json").string(), (dir_ / "." / "new.json").string()));
+  EXPECT_TRUE(fact::same_file("new.json", "./new.json"));  // relative, not existing
   EXPECT_FALSE(fact::same_file(file("new.json").string(), file("other.json").string()));
 }

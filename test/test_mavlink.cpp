@@ -506,18 +506,20 @@ TEST(MavlinkParser, EndOfDatagramSettlesFalseStartsAndCutFrames) {
   p.end_of_datagram(on_frame, on_reject);
   ASSERT_EQ(c.frames.size(), 3u);
   EXPECT_EQ(c.frames[2].seq, 3);
-  // An unverifiable frame that fills the rest of a datagram is rejected by its start byte, and the
-  // search goes on inside it: a false start whose claimed length ends at the datagram's end does
-  // not swallow the heartbeat it covers (review, session 32).
-  std::vector<uint8_t> cover = {mav::kStx, 19, 0, 0, 0, 1, 1, 0x99, 0x99, 0x0A};  // unknown id, 19 + 2 bytes more
+  // An unverifiable frame that fills the rest of a datagram is skipped whole: a HEARTBEAT's bytes
+  // inside an unknown message's payload are not taken for a frame (review, session 32).
+  std::array<uint8_t, 40> carrier{};
   const auto inner = enc.encode(mav::Heartbeat{});
-  ASSERT_EQ(cover.size() + inner.size(), 10u + 19u + 2u);  // exactly the claimed frame
-  cover.insert(cover.end(), inner.begin(), inner.end());
+  std::copy(inner.begin(), inner.end(), carrier.begin() + 5);
+  const auto wrapped = mav::frame_bytes(2, 124, carrier.data(), carrier.size(), 0, {1, 1});  // unknown id 2
   Collected v;
-  p.feed(cover.data(), cover.size(), [&](const mav::Frame& f) { v.frames.push_back(f); }, [&](const mav::Rejection& r) { v.rejections.push_back(r); });
-  p.end_of_datagram([&](const mav::Frame& f) { v.frames.push_back(f); }, [&](const mav::Rejection& r) { v.rejections.push_back(r); });
-  ASSERT_EQ(v.frames.size(), 1u);
-  EXPECT_EQ(v.frames[0].msgid, 0u);
+  const auto keep_frame = [&](const mav::Frame& f) { v.frames.push_back(f); };
+  const auto keep_reject = [&](const mav::Rejection& r) { v.rejections.push_back(r); };
+  p.feed(wrapped.data(), wrapped.size(), keep_frame, keep_reject);
+  p.end_of_datagram(keep_frame, keep_reject);
+  EXPECT_TRUE(v.frames.empty());
+  ASSERT_EQ(v.rejections.size(), 1u);
+  EXPECT_EQ(v.rejections[0].reason, mav::Reject::unknown_id);
   EXPECT_EQ(p.buffered(), 0u);
   std::array<uint8_t, 31> payload{};
   const auto unknown = mav::frame_bytes(1, 124, payload.data(), payload.size(), 0, {1, 1});

@@ -216,6 +216,9 @@ void run(const Command& c, bool formation_given_explicitly) {
   } else {
     write_file(c.output, fact::rounds_to_json(scenario.rounds), "--output");
   }
+  // (again now that the rounds file exists: a dangling link named as --output made it --truth's file)
+  if (!c.output.empty() && !c.truth.empty() && fact::same_file(c.output, c.truth))
+    throw UsageError("--truth " + c.truth + ": the same file as --output " + c.output);
   if (!c.truth.empty()) write_file(c.truth, fact::truth_to_json(scenario.truth), "--truth");
   std::cerr << "fact-simgen: wrote N = " << options.drones << " drones, K = " << options.rounds << " rounds, "
             << count_detections(scenario.rounds) << " detections (false positives: "

@@ -284,10 +284,11 @@ void Parser::reject(Reject r, uint32_t msgid, std::string detail, std::size_t sk
 }
 
 std::size_t Parser::unverified_skip(std::size_t total) const {
-  // At the end of a datagram nothing follows it: as when no start byte follows, only its start
-  // byte goes, so a false start whose claimed length ends there cannot swallow a frame inside it
-  // (review, session 32).
-  if (start_ + total == buffer_.size()) return 1;
+  // At the end of a datagram nothing follows it: skipped whole. (Skipping only its start byte let
+  // a frame inside an unknown message's payload through, and rescanned every unknown message
+  // that ends a datagram; a crafted false start ending exactly there can still hide the frame it
+  // covers, as on a stream: review, session 32.)
+  if (start_ + total == buffer_.size()) return total;
   return buffer_[start_ + total] == kStx ? total : 1;  // (take_one holds total + 1 bytes)
 }
 

@@ -27,8 +27,11 @@ std::string write_all(int fd, const std::string& text) {
   return "";
 }
 
-std::string write_in_place(const std::string& path, const std::string& text) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+// `stream`: a path into /dev or /proc (/dev/stdout): appended to, as a stream is written, so that
+// a file the process's output is redirected to keeps what came before (a regular file is
+// truncated first).
+std::string write_in_place(const std::string& path, const std::string& text, bool stream) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | (stream ? O_APPEND : O_TRUNC), 0666);
   if (fd < 0) return path + ": cannot open for writing: " + std::strerror(errno);
   std::string e = write_all(fd, text);
   if (::close(fd) != 0 && e.empty()) e = std::strerror(errno);
@@ -36,8 +39,27 @@ std::string write_in_place(const std::string& path, const std::string& text) {
 }
 
 // The regular file `path` names, following symbolic links; "" when it names something else (a
-// device, a pipe, /proc/self/fd/N of a terminal) or does not resolve.
-std::string regular_target(const std::string& path) {
+// device, a pipe), does not resolve, or any link on the way points into /dev or /proc: the
+// /dev/stdout of a process whose output goes to a file resolves to that file, and replacing it
+// would cut the output off from everything written before and after (review, session 32).
+std::string regular_target(const std::string& path, bool* stream) {
+  *stream = false;
+  std::string hop = path;
+  for (int n = 0; n < 40; ++n) {
+    struct stat st {};
+    if (::lstat(hop.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) break;
+    char next[PATH_MAX];
+    const ssize_t len = ::readlink(hop.c_str(), next, sizeof next - 1);
+    if (len < 0) return "";
+    next[len] = '\0';
+    std::string to = next;
+    if (to.rfind("/dev/", 0) == 0 || to.rfind("/proc/", 0) == 0) {
+      *stream = true;
+      return "";
+    }
+    if (to.empty() || to[0] != '/') to = std::filesystem::path(hop).parent_path().string() + "/" + to;
+    hop = to;
+  }
   char real[PATH_MAX];
   if (::realpath(path.c_str(), real) == nullptr) return "";
   struct stat st {};
@@ -49,16 +71,18 @@ std::string regular_target(const std::string& path) {
 }  // namespace
 
 std::string write_file_atomically(const std::string& path, const std::string& text) {
+  if (path.rfind("/dev/", 0) == 0 || path.rfind("/proc/", 0) == 0) return write_in_place(path, text, true);
   struct stat st {};
   std::string target = path;
+  bool stream = false;
   if (::lstat(path.c_str(), &st) == 0) {
     // A symbolic link is followed to its regular file (the link stays a link); /dev/stdout, a
     // device or a pipe is written in place: renaming over it would replace it (as root, for
     // every process of the machine: review, session 32).
-    if (S_ISLNK(st.st_mode)) target = regular_target(path);
+    if (S_ISLNK(st.st_mode)) target = regular_target(path, &stream);
     else if (!S_ISREG(st.st_mode)) target = "";
-    if (target.empty()) return write_in_place(path, text);
-    if (::stat(target.c_str(), &st) != 0) return write_in_place(path, text);
+    if (target.empty()) return write_in_place(path, text, stream);
+    if (::stat(target.c_str(), &st) != 0) return write_in_place(path, text, false);
   } else {
     st.st_mode = 0;
   }
@@ -89,7 +113,8 @@ bool same_file(const std::string& a, const std::string& b) {
   if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
   // (files not written yet: the same path spelled two ways, "a.json" and "./a.json")
   std::error_code ea, eb;
-  const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ea), cb = std::filesystem::weakly_canonical(b, eb);
+  const std::filesystem::path ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a, ea), ea),
+                              cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, eb), eb);
   return a == b || (!ea && !eb && ca == cb);
 }
 

@@ -251,8 +251,7 @@ class Parser {
   // stream order. Incomplete frames wait for more bytes.
   void feed(const uint8_t* data, std::size_t n, const FrameHandler& on_frame, const RejectHandler& on_reject);
   // The datagram just fed has ended: what is buffered is parsed as if nothing followed it (an
-  // unverifiable frame that fills the rest loses its start byte, and the search goes on inside
-  // it, as when no start byte follows one in a stream), and a frame that runs past the end
+  // unverifiable frame that fills the rest is skipped whole), and a frame that runs past the end
   // is rejected (truncated) by its start byte, the search going on behind it, until nothing is
   // buffered. A false start in one datagram so no longer holds back the frames after it, nor the
   // next datagrams (review, session 32: 13 s of an FC's heartbeats held back by 10 bytes).

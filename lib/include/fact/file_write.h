@@ -9,8 +9,10 @@ namespace fact {
 // file, flushed to the disk (fsync), given the old file's mode and owner, then renamed over it.
 // A failed write (a full disk, an unwritable directory) leaves the file as it was (an earlier
 // result is not lost) and removes the partial file. A symbolic link is followed to its regular
-// file (the link stays); a path that is not a regular file (/dev/stdout, /dev/null, a pipe) is
-// written in place, since renaming over it would replace it. A hard link to the old file keeps
+// file (the link stays); a path that is not a regular file (/dev/null, a pipe) is written in
+// place, since renaming over it would replace it, and a path into /dev or /proc (/dev/stdout, or a
+// link that leads there) is appended to, as a stream: a file the output is redirected to keeps
+// what was written before. A hard link to the old file keeps
 // the old contents. Returns "" or the reason, naming the path.
 std::string write_file_atomically(const std::string& path, const std::string& text);
 
