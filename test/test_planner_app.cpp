@@ -580,7 +580,8 @@ TEST_F(PlannerApp, BadFlagsExit2) {
       {{"--spin-overlap", "1e300"}, "spin_overlap"},
       {{"--min-separation", "1e300"}, "min_separation"},
       {{"--drone-radius", "1e5"}, "drone_radius"},
-      {{"--map-resolution", "1e300"}, "resolution (0.01 … 1 m)"}};
+      {{"--map-resolution", "1e300"}, "resolution (0.01 … 1 m)"},
+      {{"--map-resolution", "0.05", "--map-max-range", "10"}, "--map-max-range 10 m with --map-resolution 0.05 m needs a grid of ±18 m"}};
   for (const auto& [flags, message] : absurd) {
     std::vector<std::string> words = {FACT_PLANNER_BINARY, "--drone-id", "0"};
     words.insert(words.end(), flags.begin(), flags.end());
