@@ -453,14 +453,23 @@ TEST_F(FactSolveCli, AFailedWriteLeavesThePreviousFileWhole) {
     ::dup2(fd, 1);
     fs::create_symlink("/proc/self/fd/1", file("myout"));  // a link of one's own to the output
     const bool ok = ::write(1, "before\n", 7) == 7 && fact::write_file_atomically("/dev/stdout", "to stdout\n").empty() &&
-                    fact::write_file_atomically(file("myout").string(), "via a link\n").empty() && ::write(1, "after\n", 6) == 6;
+                    fact::write_file_atomically(file("myout").string(), "via a link\n").empty() &&
+                    fact::write_file_atomically("/proc/self/fd/1", "via proc\n").empty() && ::write(1, "after\n", 6) == 6;
     _exit(ok ? 0 : 1);
   }
   ASSERT_EQ(waitpid(writer, &status, 0), writer);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
   EXPECT_TRUE(fs::is_symlink("/dev/stdout")) << "/dev/stdout was replaced";
   // Written in place: the lines before and after are still there (the output file was not replaced).
-  EXPECT_EQ(read_file(file("stdout.txt")), "before\nto stdout\nvia a link\nafter\n");
+  EXPECT_EQ(read_file(file("stdout.txt")), "before\nto stdout\nvia a link\nvia proc\nafter\n");
+  // A regular file under /dev (a tmpfs such as /dev/shm) is still replaced whole, not appended to.
+  if (fs::is_directory("/dev/shm")) {
+    const std::string shm = "/dev/shm/fact-write-test-" + std::to_string(::getpid());
+    write_file(shm, "old\n");
+    EXPECT_EQ(fact::write_file_atomically(shm, "new\n"), "");
+    EXPECT_EQ(read_file(shm), "new\n");
+    fs::remove(shm);
+  }
   // One file under two spellings, before it exists.
   EXPECT_TRUE(fact::same_file(file("new.json").string(), (dir_ / "." / "new.json").string()));
   EXPECT_TRUE(fact::same_file("new.json", "./new.json"));  // relative, not existing

@@ -48,6 +48,10 @@ std::string regular_target(const std::string& path, bool* stream) {
   for (int n = 0; n < 40; ++n) {
     struct stat st {};
     if (::lstat(hop.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) break;
+    if (hop.rfind("/dev/", 0) == 0 || hop.rfind("/proc/", 0) == 0) {  // /dev/stdout, /proc/self/fd/1
+      *stream = true;
+      return "";
+    }
     char next[PATH_MAX];
     const ssize_t len = ::readlink(hop.c_str(), next, sizeof next - 1);
     if (len < 0) return "";
@@ -71,7 +75,6 @@ std::string regular_target(const std::string& path, bool* stream) {
 }  // namespace
 
 std::string write_file_atomically(const std::string& path, const std::string& text) {
-  if (path.rfind("/dev/", 0) == 0 || path.rfind("/proc/", 0) == 0) return write_in_place(path, text, true);
   struct stat st {};
   std::string target = path;
   bool stream = false;
