@@ -229,6 +229,14 @@ fact::round_packet_t injected(int drone, int round) {
   return m;
 }
 
+// Round `round` of drones 1 and 2 (injected()) on their FACT_ROUND_PACKET_<id>, on obs's first URL.
+void inject_drones_1_2(Observer& obs, int round) {
+  for (int id : {1, 2}) {
+    const fact::round_packet_t m = injected(id, round);
+    obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
+  }
+}
+
 // The message without the publisher's own fields, as bytes.
 std::vector<uint8_t> content_bytes(fact::swarm_rounds_t m) {
   m.utime = 0;
@@ -586,6 +594,17 @@ TEST_F(GossipProcesses, FaultRelayForwardsOnceAndRefusesUnusableFlags) {
 }
 
 #ifdef FACT_CLOCK_SHIFT_LIBRARY
+// Starts one process with clock_shift.c preloaded: its wall clock runs shifted by the seconds in
+// the file `shift` (re-read as the test rewrites it); processes started later are not shifted.
+void start_clock_shifted(Processes& procs, const std::string& name, const std::vector<std::string>& args,
+                         const std::string& log, const std::string& shift) {
+  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
+  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
+  procs.start(name, args, log);
+  ::unsetenv("LD_PRELOAD");
+  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+}
+
 // Drone 1's wall clock steps back an hour, then forward two (clock_shift.c, preloaded into it
 // alone): it goes on completing rounds, and never publishes a set without the live drone 2. With
 // the gossip's timeouts on the wall clock, the step back froze it for the hour and the step
@@ -604,30 +623,20 @@ TEST_F(GossipProcesses, WallClockStepsNeitherFreezeNorSplitTheSwarm) {
                                     "0.3", "--silence-timeout", "2", "--settle", "0.3", "--status-period", "0.2"};
   };
   Processes procs;
-  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
-  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
-  procs.start("gossip1", args(1), log_);
-  ::unsetenv("LD_PRELOAD");
-  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  start_clock_shifted(procs, "gossip1", args(1), log_, shift);
   procs.start("gossip2", args(2), log_);
   ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
   std::vector<fact::swarm_rounds_t> published_by_1;
-  const auto inject = [&](int round) {
-    for (int id : {1, 2}) {
-      const fact::round_packet_t m = injected(id, round);
-      obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
-    }
-  };
   const auto complete = [&](int id, int rounds) {
     auto it = obs.latest_rounds.find(id);
     return it != obs.latest_rounds.end() && it->second.complete_rounds == rounds;
   };
-  inject(0);
-  inject(1);
+  inject_drones_1_2(obs, 0);
+  inject_drones_1_2(obs, 1);
   ASSERT_TRUE(obs.wait_for([&] { return complete(1, 2) && complete(2, 2); }, 5));
   step_clock("-3600");
   obs.spin(500);
-  inject(2);
+  inject_drones_1_2(obs, 2);
   EXPECT_TRUE(obs.wait_for([&] { return complete(1, 3) && complete(2, 3); }, 5))
       << "drone 1 stopped completing rounds after its clock stepped back";
   step_clock("3600");
@@ -639,7 +648,7 @@ TEST_F(GossipProcesses, WallClockStepsNeitherFreezeNorSplitTheSwarm) {
     if (it != obs.latest_rounds.end() && it->second.num_drones != 2) split = true;
   }
   EXPECT_FALSE(split) << "drone 1 published a set without drone 2 after its clock stepped forward";
-  inject(3);
+  inject_drones_1_2(obs, 3);
   EXPECT_TRUE(obs.wait_for([&] { return complete(1, 4) && complete(2, 4); }, 5));
   EXPECT_EQ(obs.latest_rounds[1].num_drones, 2);
   EXPECT_EQ(content_bytes(obs.latest_rounds[1]), content_bytes(obs.latest_rounds[2]));
@@ -669,12 +678,6 @@ TEST_F(GossipProcesses, ASenderRestartedWithItsClockBackIsTakenBackAfterAChallen
                                     "--rounds-from-channel", "--min-members", "2", "--summary-period", "0.3",
                                     "--silence-timeout", "2", "--settle", "0.3", "--status-period", "0.2"};
   };
-  const auto inject = [&](int round) {
-    for (int id : {1, 2}) {
-      const fact::round_packet_t m = injected(id, round);
-      obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
-    }
-  };
   const auto complete = [&](int id, int rounds) {
     auto it = obs.latest_rounds.find(id);
     return it != obs.latest_rounds.end() && it->second.complete_rounds == rounds && it->second.num_drones == 2;
@@ -683,19 +686,15 @@ TEST_F(GossipProcesses, ASenderRestartedWithItsClockBackIsTakenBackAfterAChallen
   procs.start("gossip1", args(1), log_);
   procs.start("gossip2", args(2), log_);
   ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
-  inject(0);
-  inject(1);
+  inject_drones_1_2(obs, 0);
+  inject_drones_1_2(obs, 1);
   ASSERT_TRUE(obs.wait_for([&] { return complete(1, 2) && complete(2, 2); }, 5));
   procs.kill_now("gossip2");
   obs.latest_rounds.erase(2);
-  ::setenv("FACT_CLOCK_SHIFT_FILE", shift.c_str(), 1);
-  ::setenv("LD_PRELOAD", FACT_CLOCK_SHIFT_LIBRARY, 1);
-  procs.start("gossip2", args(2), log_);
-  ::unsetenv("LD_PRELOAD");
-  ::unsetenv("FACT_CLOCK_SHIFT_FILE");
+  start_clock_shifted(procs, "gossip2", args(2), log_, shift);
   // The restarted drone 2 recovers rounds 0–1 (answers to its requests), then both complete round 2.
   EXPECT_TRUE(obs.wait_for([&] { return complete(2, 2); }, 5)) << "the restarted drone 2 did not recover rounds 0–1";
-  inject(2);
+  inject_drones_1_2(obs, 2);
   EXPECT_TRUE(obs.wait_for([&] { return complete(1, 3) && complete(2, 3); }, 5))
       << "drone 1 did not take the restarted drone 2's rounds";
   EXPECT_EQ(content_bytes(obs.latest_rounds[1]), content_bytes(obs.latest_rounds[2]));
@@ -741,11 +740,7 @@ TEST_F(GossipProcesses, ARecordingOfAnotherSessionIsRefused) {
     flight_a.start("gossip1", args(1, "A"), log_);
     flight_a.start("gossip2", args(2, "A"), log_);
     ASSERT_TRUE(obs.wait_for([&] { return obs.have_status({{"fact-gossip", 1}, {"fact-gossip", 2}}); }, 5));
-    for (int round : {0, 1})
-      for (int id : {1, 2}) {
-        const fact::round_packet_t m = injected(id, round);
-        obs.at(0).publish("FACT_ROUND_PACKET_" + std::to_string(id), &m);
-      }
+    for (int round : {0, 1}) inject_drones_1_2(obs, round);
     ASSERT_TRUE(obs.wait_for([&] { return obs.latest_rounds.count(1) && obs.latest_rounds[1].complete_rounds == 2; }, 5));
     for (const auto& [name, code] : flight_a.stop_all()) EXPECT_EQ(code, 0) << name;
   }
