@@ -158,15 +158,14 @@ void check(Options& o) {
   // The map's grid (±12 m) grows with --map-max-range so that it holds a whole frame's reach on
   // each side of the drone (1.6 × max range covers the default camera's widest ray, 1.52 ×), plus 2 m.
   if (std::isfinite(o.map.max_range)) o.map.half_extent_xy = std::max(o.map.half_extent_xy, 1.6 * o.map.max_range + 2.0);
-  if (o.map.resolution > 0.01 && std::isfinite(o.map.max_range) && o.map.max_range > 0) {
-    const double side = 2 * o.map.half_extent_xy / o.map.resolution, height = (o.map.z_max - o.map.z_min) / o.map.resolution;
-    if (side * side * height > 5e7) {
-      std::ostringstream e;
-      e << "--map-max-range " << o.map.max_range << " m with --map-resolution " << o.map.resolution
-        << " m needs a grid of ±" << o.map.half_extent_xy << " m, " << side * side * height
-        << " voxels: more than 5e7 (a shorter range or a coarser resolution)";
-      throw FlagError(e.str());
-    }
+  // (said in the flags' terms here: the map's own message names only the voxel count)
+  if (o.map.resolution > 0.01 && std::isfinite(o.map.max_range) && o.map.max_range > 0 &&
+      fact::local_map_voxels(o.map) > fact::kMaxMapVoxels) {
+    std::ostringstream e;
+    e << "--map-max-range " << o.map.max_range << " m with --map-resolution " << o.map.resolution
+      << " m needs a grid of ±" << o.map.half_extent_xy << " m, " << fact::local_map_voxels(o.map)
+      << " voxels: more than " << fact::kMaxMapVoxels << " (a shorter range or a coarser resolution)";
+    throw FlagError(e.str());
   }
   if (std::string e = fact::local_map_params_error(o.map); !e.empty()) throw FlagError("map: " + e);
 }

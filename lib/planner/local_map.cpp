@@ -22,10 +22,14 @@ std::string local_map_params_error(const LocalMapParams& p) {
   if (p.pixel_step < 1) return bad("pixel_step", p.pixel_step);
   if (p.box_dilation_px < 0) return bad("box_dilation_px", p.box_dilation_px);
   if (!(p.box_dilation_fraction >= 0)) return bad("box_dilation_fraction", p.box_dilation_fraction);
-  const double cells = (2 * p.half_extent_xy / p.resolution) * (2 * p.half_extent_xy / p.resolution) *
-                       ((p.z_max - p.z_min) / p.resolution);
-  if (cells > 5e7) return "grid of " + std::to_string(cells) + " voxels is too large";
+  const double cells = local_map_voxels(p);
+  if (cells > kMaxMapVoxels) return "grid of " + std::to_string(cells) + " voxels is too large";
   return "";
+}
+
+double local_map_voxels(const LocalMapParams& p) {
+  const double side = 2 * p.half_extent_xy / p.resolution;
+  return side * side * ((p.z_max - p.z_min) / p.resolution);
 }
 
 LocalMap::LocalMap(const LocalMapParams& params) : params_(params) {

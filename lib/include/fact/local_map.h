@@ -64,6 +64,11 @@ struct LocalMapParams {
 // "" when usable, else which field and value is wrong.
 std::string local_map_params_error(const LocalMapParams& p);
 
+// The grid's voxel count for p (the x, y and z extents over the resolution); usable params keep it
+// at most kMaxMapVoxels (memory: 2 bytes a voxel).
+double local_map_voxels(const LocalMapParams& p);
+constexpr double kMaxMapVoxels = 5e7;
+
 // What one add_frame call did.
 struct FrameIntegration {
   int points = 0;          // points counted into voxels
