@@ -574,8 +574,8 @@ TEST_F(GossipProcesses, FaultRelayForwardsOnceAndRefusesUnusableFlags) {
       {{"--reorder", "1.5"}, "--reorder: expected a probability in [0, 1]"},
       {{"--max-delay-ms", "nan"}, "--max-delay-ms: expected a number in [1, 10000] ms, got nan"},
       {{"--channel", "("}, "--channel (: not a valid channel regex"},
-      {{"--channel", ""}, "--channel: an empty pattern"},
-      {{"--status-channel", ""}, "--status-channel: empty"},
+      {{"--channel", ""}, "--channel: expected a value, got an empty string"},
+      {{"--status-channel", ""}, "--status-channel: expected a value, got an empty string"},
       {{"--drone-id", "-7"}, "--drone-id: expected an id >= 0, got -7"},
   };
   for (const auto& [flags, reason] : cases) {

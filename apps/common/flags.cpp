@@ -1,4 +1,5 @@
 #include "common/flags.h"
+#include "common/cli_checks.h"
 
 #include <cmath>
 #include <iostream>
@@ -67,6 +68,7 @@ bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeou
 
 int parse_flags(CLI::App& cli, int argc, char** argv, const char* app, const std::function<void()>& check) {
   try {
+    refuse_empty_values(cli);
     cli.parse(argc, argv);
     check();
     return -1;

@@ -30,7 +30,7 @@
 // Publishes its counters (fact::app_status_t) on the drone URL's --status-channel.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.
 #include "common/app.h"
-#include "common/uint64_flag.h"
+#include "common/cli_checks.h"
 
 #include <CLI/CLI.hpp>
 #include <glib.h>
@@ -302,6 +302,7 @@ int main(int argc, char** argv) {
   cli.add_option("--status-period", f.status_period, "s between status messages (0.001 … 3600)")->capture_default_str();
   cli.footer("Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

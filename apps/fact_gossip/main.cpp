@@ -11,6 +11,7 @@
 // With --swarm-url, FACT_GOSSIP (in and out) is on that URL, the swarm's bus, and everything else
 // on --lcm-url, the drone's own bus: the only traffic between drones is the gossip.
 // Exit codes: 0 on SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/flags.h"
 #include "common/convert.h"
@@ -518,6 +519,7 @@ int main(int argc, char** argv) {
       "kind|sender|seq|payload. Make a key: head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \\n' > swarm.key\n"
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

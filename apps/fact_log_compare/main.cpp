@@ -14,6 +14,7 @@
 // (results_published, swarm_rounds_published) grew by — a recorder that missed UDP messages,
 // which no replay can match. (The app publishes a message before the heartbeat that counts it,
 // on the same bus, so one recorder sees them in that order.)
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/log_reader.h"
 
@@ -156,6 +157,7 @@ int main(int argc, char** argv) {
   cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
              "that lost messages (fewer results or rounds of a compared drone than its apps' status counters grew by in it).");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

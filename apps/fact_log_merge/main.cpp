@@ -14,6 +14,7 @@
 // renamed when complete, and may not be one of the inputs.
 // Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags, an input that cannot be
 // read, is damaged or is not an LCM log, or the output named as an input (nothing is written then).
+#include "common/cli_checks.h"
 #include "common/log_reader.h"
 
 #include <CLI/CLI.hpp>
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
   cli.add_option("inputs", inputs, "The logs to merge")->required()->type_name("LOG");
   cli.footer("Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags or an unreadable input.");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -17,6 +17,7 @@
 //                      frames on LCM, on the camera's clock: its newest utime within 1 s of the
 //                      newest frame's (a VIO on the boot clock matches no detection).
 // Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/convert.h"
 #include "common/flags.h"
@@ -272,6 +273,7 @@ int main(int argc, char** argv) {
   cli.add_option("--timeout", o.timeout, "s to wait for the flight controller, frames and odometry")->capture_default_str();
   cli.footer("Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
     fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::required);
     if (!(std::isfinite(o.timeout) && o.timeout > 0)) throw fact::app::FlagError("--timeout: expected a number > 0, got " + std::to_string(o.timeout));

@@ -8,6 +8,7 @@
 // every round, finite numbers, …), so the tool never sends what the solver would reject.
 //
 // Exit codes: 0 published (or stopped by SIGINT/SIGTERM); 1 LCM failed; 2 bad flags or input.
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/convert.h"
 #include "fact/json_io.h"
@@ -192,6 +193,7 @@ int main(int argc, char** argv) {
   add_flags(app, options);
   app.get_formatter()->column_width(30);
   try {
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
     check(options);
     return run(options);

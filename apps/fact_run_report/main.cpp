@@ -9,6 +9,7 @@
 // Exit codes: 0 certified, the drones agree and every frame is within the bounds; 3 not
 // certified; 4 certified but outside the bounds or the drones disagree (certified-wrong);
 // 2 bad flags, an unreadable or damaged log, no truth, or a --json / --png that cannot be written.
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/log_reader.h"
 #include "evaluate.h"
@@ -628,6 +629,7 @@ int main(int argc, char** argv) {
              "an unreadable or damaged log, no truth, or a --json / --png that cannot be written.\n"
              "A log with no result at all is not certified (3); one whose results cannot be decoded is damaged (2).");
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -15,6 +15,7 @@
 // nothing with the others' but the gossip.
 //
 // Exit codes: 0 at --duration or on SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.
+#include "common/cli_checks.h"
 #include "common/app.h"
 #include "fact/frame_t.hpp"
 #include "fact/odometry_t.hpp"
@@ -744,6 +745,7 @@ int main(int argc, char** argv) {
   Options o;
   add_flags(cli, o);
   try {
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

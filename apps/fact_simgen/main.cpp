@@ -1,7 +1,7 @@
 // fact-simgen: generate a simulated swarm's observation rounds (fact-rounds-v1) and, optionally,
 // its ground truth (fact-truth-v1), deterministic by seed. The model is fact::generate_scenario's
 // (fact/simgen.h). Exit status: 0 written, 2 bad options or unwritable/unreadable files.
-#include "common/uint64_flag.h"
+#include "common/cli_checks.h"
 #include "fact/file_write.h"
 #include "fact/json_io.h"
 #include "fact/simgen.h"
@@ -241,6 +241,7 @@ int main(int argc, char** argv) {
   add_sensor_options(app, command);
   add_file_options(app, command);
   try {
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help
     return app.exit(e);

@@ -4,6 +4,7 @@
 // Exit codes: 0 certified; 3 not certified (the result is still written); 2 invalid input (bad
 // flags, unreadable or malformed input, or an invalid_input result, which is still written);
 // 1 the output could not be written, or an internal error.
+#include "common/cli_checks.h"
 #include "fact/file_write.h"
 #include "fact/estimator.h"
 #include "fact/json_io.h"
@@ -151,6 +152,7 @@ int main(int argc, char** argv) {
   add_flags(app, flags);
   app.get_formatter()->column_width(32);
   try {
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
