@@ -285,6 +285,38 @@ TEST(RunReportApp, NoResultIsNotCertifiedAndJudgesNothing) {
   for (const auto& f : {log, json, png}) fs::remove(f);
 }
 
+// A report or picture that cannot be written whole exits 2 and keeps the earlier file: the write
+// goes to a partial file renamed over it (the report was written in place, so a full disk left a
+// truncated report behind). Here a file-size limit of 1 KiB (ulimit -f, SIGXFSZ ignored so the
+// write fails with EFBIG) stands in for the full disk.
+TEST(RunReportApp, AReportThatCannotBeWrittenWholeKeepsTheEarlierOne) {
+  const std::string log = write_log("certified", 0);
+  const std::string json = log + ".json", png = log + ".png";
+  ASSERT_EQ(run_report("--log " + log + " --json " + json + " --png " + png).code, 0);
+  const auto read_all = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string report = read_all(json), picture = read_all(png);
+  ASSERT_GT(report.size(), 1024u);  // larger than the limit below
+  const auto limited = [&](const std::string& args) {
+    return fact::test::run_command("bash -c 'trap \"\" XFSZ; ulimit -f 1; exec " + std::string(FACT_RUN_REPORT_BINARY) +
+                                   " " + args + "'");
+  };
+  const Ran r = limited("--log " + log + " --json " + json);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("cannot write the report"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(json), std::string::npos) << r.out;
+  EXPECT_TRUE(read_all(json) == report) << "the earlier report was changed";
+  const Ran p = limited("--log " + log + " --png " + png);
+  EXPECT_EQ(p.code, 2) << p.out;
+  EXPECT_NE(p.out.find("cannot write the picture " + png), std::string::npos) << p.out;
+  EXPECT_TRUE(read_all(png) == picture) << "the earlier picture was changed";
+  for (const auto& entry : fs::directory_iterator(fs::path(log).parent_path()))  // no partial file left
+    for (const auto& f : {json, png}) EXPECT_EQ(entry.path().string().rfind(f + ".partial", 0), std::string::npos) << entry.path();
+  for (const auto& f : {log, json, png}) fs::remove(f);
+}
+
 TEST(RunReportApp, BadInputExitsTwoWithTheReason) {
   const std::string no_truth = write_log("certified", 0, false);
   const Ran r = run_report("--log " + no_truth);

@@ -8,11 +8,13 @@
 // at the result's time, for reference). Prints a table, writes a top-down PNG and a JSON summary.
 // Exit codes: 0 certified, the drones agree and every frame is within the bounds; 3 not
 // certified; 4 certified but outside the bounds or the drones disagree (certified-wrong);
-// 2 bad flags, an unreadable or damaged log, no truth, or a --json / --png that cannot be written.
+// 2 bad flags, an unreadable or damaged log, no truth, or a --json / --png that cannot be written
+// (each is written whole or not at all: fact::write_file_atomically keeps an earlier file).
 #include "common/cli_checks.h"
 #include "common/app.h"
 #include "common/log_reader.h"
 #include "evaluate.h"
+#include "fact/file_write.h"
 #include "fact/odometry_t.hpp"
 #include "fact/sim_clock_t.hpp"
 #include "fact/sim_world.h"
@@ -82,14 +84,12 @@ bool finite_truth(const fact::truth_t& t) {
   return true;
 }
 
-// Writes the report; false (after saying why on stderr) when the file cannot be written whole
-// (an unwritable path or a full disk used to go unnoticed, with exit 0).
+// Writes the report whole or not at all (fact::write_file_atomically: a failed write keeps an
+// earlier report); false, after saying why on stderr, when it cannot.
 bool write_json(const std::string& path, const nlohmann::json& j) {
-  std::ofstream out(path);
-  out << j.dump(2) << "\n";
-  out.flush();
-  if (out) return true;
-  std::cerr << kApp << ": error: cannot write the report " << path << "\n";
+  const std::string why = fact::write_file_atomically(path, j.dump(2) + "\n");
+  if (why.empty()) return true;
+  std::cerr << kApp << ": error: cannot write the report: " << why << "\n";
   return false;
 }
 
@@ -331,7 +331,11 @@ bool write_png(const std::string& path, const fact::sim::World& world, const Run
   cv::putText(c.img, title, {10, 22}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1, cv::LINE_AA);
   cv::putText(c.img, "filled: true pose, ring: estimated pose, thin: true trajectory, grey: mutual observation, 1 m grid",
               {10, c.img.rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {60, 60, 60}, 1, cv::LINE_AA);
-  return cv::imwrite(path, c.img);
+  std::vector<uchar> png;  // PNG whatever the file's extension (imwrite chose the format by it)
+  if (!cv::imencode(".png", c.img, png)) return false;
+  const std::string why = fact::write_file_atomically(path, std::string(png.begin(), png.end()));
+  if (!why.empty()) std::cerr << kApp << ": error: " << why << "\n";
+  return why.empty();
 }
 
 // ---------------------------------------------------------------------------------------------- report
