@@ -108,25 +108,46 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
     thread_local std::vector<Eigen::Vector3d> mapped;
     thread_local std::vector<Eigen::Matrix3d> mapped_cov;  // j's covariances in f_i axes, made when first needed
     thread_local std::vector<char> have_cov;
+    thread_local std::vector<double> spread2;  // spread(mapped[b])², once per point of j (not per pairing)
     mapped.clear();
-    for (const Point& b : B) mapped.push_back(R * b.x + pose.t);
+    spread2.clear();
+    for (const Point& b : B) {
+      mapped.push_back(R * b.x + pose.t);
+      const double s = spread(mapped.back());
+      spread2.push_back(s * s);
+    }
     mapped_cov.resize(B.size());
     have_cov.assign(B.size(), 0);
     // Normalised squared distance and log-likelihood ratio (inlier against clutter) of every
     // admissible pairing; own position ↔ own position is not a pairing.
     const size_t nb = B.size();
-    thread_local std::vector<double> d2, det_s;
-    d2.assign(A.size() * nb, std::numeric_limits<double>::infinity()), det_s.resize(A.size() * nb);
+    // r Σ⁻¹ r ≥ |r|² / λ_max(Σ): most pairs fail the gate on this bound alone. The bound is
+    // tested first for every pairing, over plain arrays of j's mapped points.
+    thread_local std::vector<double> mx, my, mz, b_var;
+    thread_local std::vector<unsigned char> near;
+    mx.resize(nb), my.resize(nb), mz.resize(nb), b_var.resize(nb), near.resize(A.size() * nb);
+    for (size_t b = 0; b < nb; ++b)
+      mx[b] = mapped[b].x(), my[b] = mapped[b].y(), mz[b] = mapped[b].z(), b_var[b] = B[b].sigma * B[b].sigma;
+    for (size_t a = 0; a < A.size(); ++a) {
+      const double ax = A[a].x.x(), ay = A[a].x.y(), az = A[a].x.z(), a_var = A[a].sigma * A[a].sigma;
+      unsigned char* row = near.data() + a * nb;
+      for (size_t b = 0; b < nb; ++b) {
+        const double dx = ax - mx[b], dy = ay - my[b], dz = az - mz[b];
+        row[b] = dx * dx + dy * dy + dz * dz <= gate2 * (a_var + b_var[b] + spread2[b]);
+      }
+    }
+    // Mutual nearest neighbours by d²: each point's nearest admissible partner, updated as the
+    // pairings are scored (in the order a, then b: ties go to the first).
+    thread_local std::vector<int> best_b, best_a;
+    thread_local std::vector<double> cost_b, cost_a, det_b;  // det_b[a]: det(S) of a's nearest pairing
+    best_b.assign(A.size(), -1), best_a.assign(B.size(), -1);
+    cost_b.assign(A.size(), INFINITY), cost_a.assign(B.size(), INFINITY), det_b.resize(A.size());
     for (size_t a = 0; a < A.size(); ++a)
       for (size_t b = 0; b < nb; ++b) {
-        if (A[a].det < 0 && B[b].det < 0) continue;
-        const double s = spread(mapped[b]);
+        if (!near[a * nb + b] || (A[a].det < 0 && B[b].det < 0)) continue;
         const Eigen::Vector3d r = A[a].x - mapped[b];
-        // r Σ⁻¹ r ≥ |r|² / λ_max(Σ): most pairs fail the gate on this bound alone.
-        const double bound = A[a].sigma * A[a].sigma + B[b].sigma * B[b].sigma + s * s;
-        if (r.squaredNorm() > gate2 * bound) continue;
         if (!have_cov[b]) mapped_cov[b] = R * B[b].cov * R.transpose(), have_cov[b] = 1;
-        const Eigen::Matrix3d S = A[a].cov + mapped_cov[b] + s * s * Eigen::Matrix3d::Identity();
+        const Eigen::Matrix3d S = A[a].cov + mapped_cov[b] + spread2[b] * Eigen::Matrix3d::Identity();
         // S⁻¹ = adj(S) / det(S) by cofactors (S symmetric positive definite, 3 × 3).
         const double c00 = S(1, 1) * S(2, 2) - S(1, 2) * S(1, 2), c01 = S(0, 2) * S(1, 2) - S(0, 1) * S(2, 2),
                      c02 = S(0, 1) * S(1, 2) - S(0, 2) * S(1, 1), c11 = S(0, 0) * S(2, 2) - S(0, 2) * S(0, 2),
@@ -134,17 +155,8 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
         const double det = S(0, 0) * c00 + S(0, 1) * c01 + S(0, 2) * c02;
         const double q = r.x() * (c00 * r.x() + 2 * (c01 * r.y() + c02 * r.z())) +
                          r.y() * (c11 * r.y() + 2 * c12 * r.z()) + r.z() * c22 * r.z();
-        d2[a * nb + b] = q / det;
-        det_s[a * nb + b] = det;  // det(S); its log is taken for matches only
-      }
-    thread_local std::vector<int> best_b, best_a;
-    thread_local std::vector<double> cost_b, cost_a;
-    best_b.assign(A.size(), -1), best_a.assign(B.size(), -1);
-    cost_b.assign(A.size(), INFINITY), cost_a.assign(B.size(), INFINITY);
-    for (size_t a = 0; a < A.size(); ++a)
-      for (size_t b = 0; b < nb; ++b) {
-        const double c = d2[a * nb + b];
-        if (c < cost_b[a]) cost_b[a] = c, best_b[a] = static_cast<int>(b);
+        const double c = q / det;
+        if (c < cost_b[a]) cost_b[a] = c, best_b[a] = static_cast<int>(b), det_b[a] = det;
         if (c < cost_a[b]) cost_a[b] = c, best_a[b] = static_cast<int>(a);
       }
     for (size_t a = 0; a < A.size(); ++a) {
@@ -152,7 +164,7 @@ void verify(const Problem& p, const PointSets& points, int i, int j, const Relat
       if (b < 0 || best_a[b] != static_cast<int>(a) || cost_b[a] > gate2) continue;
       // log-likelihood ratio of inlier against clutter: log V − ½ log det(2πS) − ½ d²
       const double evidence = std::log(kClutterVolume) - 1.5 * std::log(2 * M_PI) -
-                              0.5 * std::log(det_s[a * nb + b]) - 0.5 * cost_b[a];
+                              0.5 * std::log(det_b[a]) - 0.5 * cost_b[a];
       if (evidence <= 0) continue;
       h->score += evidence;
       h->links.push_back({k, A[a].det, B[b].det, evidence});
