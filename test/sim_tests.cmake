@@ -35,3 +35,12 @@ if(TARGET fact-sim AND TARGET fact-fc-bridge AND TARGET fact_mavlink)
   add_dependencies(fact_sim_fc_tests fact-sim fact-fc-bridge)
   fact_discover_tests(fact_sim_fc_tests 60)
 endif()
+
+# The simulated flight controller's command handling in process (apps/fact_sim/sim_fc.cpp compiled
+# in, no sockets): the disarm ground test and DO_SET_MODE's base mode.
+if(TARGET fact-sim AND TARGET fact_mavlink)
+  add_executable(fact_sim_fc_command_tests test_sim_fc_commands.cpp ${PROJECT_SOURCE_DIR}/apps/fact_sim/sim_fc.cpp)
+  target_include_directories(fact_sim_fc_command_tests PRIVATE ${PROJECT_SOURCE_DIR}/apps/fact_sim)
+  target_link_libraries(fact_sim_fc_command_tests PRIVATE fact_app_common fact_sim fact_mavlink GTest::gtest_main)
+  fact_discover_tests(fact_sim_fc_command_tests 30)
+endif()

@@ -257,6 +257,17 @@ TEST(SimWorldStarts, BadStartsAreNamed) {
   w.room_size.z() = 0.5;
   EXPECT_NE(fact::sim::starts_error(w).find("drones.height max 2.5 m is above the ceiling 0.5 m"), std::string::npos)
       << fact::sim::starts_error(w);
+  // The hover height counts from the takeoff spot: a start on a box (review, session 33: the drone
+  // sat at the ceiling, never airborne) must leave room for it.
+  w.room_size.z() = 3;
+  w.drone_config.height_min = 1.4, w.drone_config.height_max = 1.5;
+  w.starts[1].position = {3, 0, 1.0};
+  EXPECT_EQ(fact::sim::starts_error(w), "");
+  w.starts[1].position = {3, 0, 1.75};
+  EXPECT_NE(fact::sim::starts_error(w).find("start 1 (drone 1): takeoff at z = 1.75 m plus drones.height max 1.5 m is "
+                                            "above the ceiling 3 m"),
+            std::string::npos)
+      << fact::sim::starts_error(w);
 }
 
 // Random starts keep the body's radius from the walls and two radii from each other, whatever

@@ -162,10 +162,11 @@ void add_flags(CLI::App& app, Options& o) {
 }
 
 // v in (0, most] (or 0 when zero_ok), naming the flag and the value.
-void check_rate(const char* flag, double v, bool zero_ok, double most) {
-  if (v <= most && (v > 0 || (zero_ok && v == 0))) return;  // (false for NaN)
+// v in [least, most], or 0 where zero_ok (0 = off / unlimited).
+void check_rate(const char* flag, double v, bool zero_ok, double least, double most) {
+  if ((v >= least && v <= most) || (zero_ok && v == 0)) return;  // (false for NaN)
   std::ostringstream s;
-  s << flag << ": expected a number " << (zero_ok ? "in [0, " : "in (0, ") << most << "], got " << v;
+  s << flag << ": expected " << (zero_ok ? "0 or " : "") << "a number in [" << least << ", " << most << "], got " << v;
   throw FlagError(s.str());
 }
 
@@ -179,14 +180,17 @@ void check(const Options& o) {
   // Outputs go out at most once per 10 ms batch: a stream above 100 Hz was cut to 100 Hz, and
   // 1e11 Hz spun in its scheduling loop deaf to SIGTERM. Durations and the epoch stay far from
   // int64 µs overflow (1e7 s is 116 days).
+  // The lower bounds keep every sample time and pacing target (1e6/rate µs steps, t/rate) far
+  // inside int64: a stream at 1e-14 Hz put its second sample past 2^63 µs and its scheduling
+  // loop never ended (review, session 33).
   const double per_batch = 1e6 / static_cast<double>(kBatchUs);
-  check_rate("--rate", o.rate, true, 1e4);
-  check_rate("--duration", o.duration, true, 1e7);
-  check_rate("--camera-rate", o.camera_rate, false, per_batch);
-  check_rate("--odometry-rate", o.odometry_rate, false, per_batch);
-  check_rate("--truth-rate", o.truth_rate, false, per_batch);
-  check_rate("--spin-rate", o.spin_rate, false, 1.5);
-  check_rate("--lockstep-timeout", o.lockstep_timeout, false, 3600);
+  check_rate("--rate", o.rate, true, 1e-3, 1e4);
+  check_rate("--duration", o.duration, true, 1e-3, 1e7);
+  check_rate("--camera-rate", o.camera_rate, false, 1e-3, per_batch);
+  check_rate("--odometry-rate", o.odometry_rate, false, 1e-3, per_batch);
+  check_rate("--truth-rate", o.truth_rate, false, 1e-3, per_batch);
+  check_rate("--spin-rate", o.spin_rate, false, 1e-3, 1.5);
+  check_rate("--lockstep-timeout", o.lockstep_timeout, false, 1e-3, 3600);
   if (o.epoch_utime < 0 || o.epoch_utime > 4000000000000000)
     throw FlagError("--epoch-utime: expected 0 … 4e15 us (before 2096), got " + std::to_string(o.epoch_utime));
   if (o.render_threads < 1 || o.render_threads > 64)
@@ -224,10 +228,11 @@ fact::sim::World load_world(const Options& o) {
                         std::to_string(w.starts.size()) + " starts");
       w.starts.resize(static_cast<size_t>(o.drones));
       if (!c.ids.empty()) c.ids.resize(static_cast<size_t>(o.drones));
-    } else if (!c.ids.empty() && static_cast<int>(c.ids.size()) > o.drones) {
+    } else if (static_cast<int>(c.ids.size()) > o.drones) {
       c.ids.resize(static_cast<size_t>(o.drones));
-    } else {
-      c.ids.clear();
+    } else if (!c.ids.empty()) {  // (they were dropped for 0 … N−1, so FACT_*_<id> channels went unused)
+      throw FlagError("--drones: " + std::to_string(o.drones) + " but the world file lists only " +
+                      std::to_string(c.ids.size()) + " ids");
     }
     c.count = o.drones;
   }
@@ -441,6 +446,10 @@ class Simulator {
       reject("rejected_nan", "setpoint on " + channel + ": " + err + ", ignored");
       return;
     }
+    if (const std::string range = fact::sim::setpoint_range_error(sp); !range.empty()) {
+      reject("rejected_range", "setpoint on " + channel + ": " + range + ", ignored");
+      return;
+    }
     status_->count("setpoints");
     if (!d.external) log_->event("first setpoint for drone " + std::to_string(d.sim.id) + " on " + channel);
     d.external = true;
@@ -539,11 +548,12 @@ class Simulator {
     return true;
   }
 
-  // Whether the k-th sample of a `rate` Hz stream (at round(k·1e6/rate) µs) is due at t.
+  // Whether the k-th sample of a `rate` Hz stream (at round(k·1e6/rate) µs) is due at t. A sample
+  // time beyond int64 µs is never due (check() keeps rates far from that).
   static bool due(int64_t t, double rate, int64_t* k) {
-    const int64_t at = static_cast<int64_t>(std::llround(static_cast<double>(*k) * 1e6 / rate));
-    if (t < at) return false;
-    while (static_cast<int64_t>(std::llround(static_cast<double>(*k) * 1e6 / rate)) <= t) ++*k;
+    const auto at = [&] { return static_cast<double>(*k) * 1e6 / rate; };
+    if (!(at() < 9e18) || t < std::llround(at())) return false;
+    while (at() < 9e18 && std::llround(at()) <= t) ++*k;
     return true;
   }
 

@@ -156,14 +156,15 @@ void SimFc::on_setpoint(const mav::SetPositionTargetLocalNed& m, int64_t t) {
   }
   // Magnitudes no quadrotor in a room can mean (a scrambled or unit-confused sender).
   for (int k = 0; k < 3; ++k) {
-    if ((use_p[k] && std::abs(ned_p[k]) > 1000) || (use_v[k] && std::abs(ned_v[k]) > 100) ||
-        (use_a[k] && std::abs(ned_a[k]) > 100)) {
+    if ((use_p[k] && std::abs(ned_p[k]) > sim::kMaxSetpointPosition) ||
+        (use_v[k] && std::abs(ned_v[k]) > sim::kMaxSetpointVelocity) ||
+        (use_a[k] && std::abs(ned_a[k]) > sim::kMaxSetpointAcceleration)) {
       reject("fc_rejected_range", what + " " + kNedAxis[k] + " axis out of range (|position| <= 1000 m, |velocity| <= 100 m/s, "
                                              "|acceleration| <= 100 m/s^2): " + num(ned_p[k]) + ", " + num(ned_v[k]) + ", " + num(ned_a[k]));
       return;
     }
   }
-  if (use_yaw_rate && std::abs(m.yaw_rate) > 100) {
+  if (use_yaw_rate && std::abs(m.yaw_rate) > sim::kMaxSetpointYawRate) {
     reject("fc_rejected_range", what + " yaw_rate = " + num(m.yaw_rate) + " rad/s out of range");
     return;
   }
@@ -204,8 +205,14 @@ void SimFc::on_command(const mav::CommandLong& c, const sim::SimDrone& drone, in
       if (!armed_) event("armed (mode " + mode_name(main_mode_, sub_mode_) + ")");
       armed_ = true;
     } else if (c.param[0] == 0.0f) {
-      const bool on_ground = drone.landed || (drone.p.z() - drone.origin.z() <= 0.02 && drone.v.norm() < 0.2);
-      if (!on_ground) return deny("disarm refused in the air (" + num(drone.p.z() - drone.origin.z()) + " m up)");
+      // On the ground: standing on the floor, or back on the spot it took off from (a start on a
+      // box). The height above the start alone let a drone that took off from a box and flew
+      // off it disarm in mid-air (review, session 33).
+      const double above_floor = drone.p.z();  // (the floor is z = 0; dynamics stops the centre there)
+      const double above_start = drone.p.z() - drone.origin.z();
+      const bool on_start = (drone.p - drone.origin).head<2>().norm() <= 0.1 && above_start <= 0.02;
+      const bool on_ground = drone.landed || ((above_floor <= 0.02 || on_start) && drone.v.norm() < 0.2);
+      if (!on_ground) return deny("disarm refused in the air (" + num(above_floor) + " m above the floor)");
       if (armed_) event("disarmed");
       armed_ = false;
     } else {
@@ -213,7 +220,8 @@ void SimFc::on_command(const mav::CommandLong& c, const sim::SimDrone& drone, in
     }
   } else if (c.command == mav::kCmdDoSetMode) {
     const float base = c.param[0];
-    if (!std::isfinite(base) || (static_cast<int>(base) & mav::kModeFlagCustomModeEnabled) == 0)
+    // (MAV_MODE is a uint8: anything outside [0, 256) has no flags, and the cast would be undefined)
+    if (!(base >= 0 && base < 256) || (static_cast<int>(base) & mav::kModeFlagCustomModeEnabled) == 0)
       return deny("DO_SET_MODE param1 = " + num(base) + " lacks MAV_MODE_FLAG_CUSTOM_MODE_ENABLED");
     const float main = c.param[1], sub = c.param[2];
     uint32_t new_main = 0, new_sub = 0;

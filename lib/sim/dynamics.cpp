@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace fact::sim {
 namespace {
@@ -37,6 +38,28 @@ std::string setpoint_error(const Setpoint& sp) {
     if (!e.empty()) return e;
   if (!std::isfinite(sp.yaw)) return "yaw = " + std::to_string(sp.yaw);
   if (!std::isfinite(sp.yaw_rate)) return "yaw_rate = " + std::to_string(sp.yaw_rate);
+  return "";
+}
+
+std::string setpoint_range_error(const Setpoint& sp) {
+  const auto g = [](double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", x);
+    return std::string(b);
+  };
+  auto vec = [&](const char* name, const Eigen::Vector3d& v, double limit, const char* unit) -> std::string {
+    for (int k = 0; k < 3; ++k)
+      if (!(std::abs(v[k]) <= limit))
+        return std::string(name) + "[" + std::to_string(k) + "] = " + g(v[k]) + " (|" + name + "| <= " + g(limit) + " " +
+               unit + ")";
+    return "";
+  };
+  for (const std::string& e : {vec("position", sp.position, kMaxSetpointPosition, "m"),
+                               vec("velocity", sp.velocity, kMaxSetpointVelocity, "m/s"),
+                               vec("acceleration", sp.acceleration, kMaxSetpointAcceleration, "m/s^2")})
+    if (!e.empty()) return e;
+  if (!(std::abs(sp.yaw_rate) <= kMaxSetpointYawRate))
+    return "yaw_rate = " + g(sp.yaw_rate) + " (|yaw_rate| <= " + g(kMaxSetpointYawRate) + " rad/s)";
   return "";
 }
 

@@ -133,7 +133,11 @@ void Renderer::render(const std::vector<DronePose>& drones, int viewer, Rendered
         axis = a;
       }
     }
-    if (!(t > 0) || !std::isfinite(t)) t = 0;  // camera outside the room: nothing
+    // A camera on a face (a drone standing on the floor: its centre, and the camera, at z = 0)
+    // meets that face at t = ±0: it sees it there, too near for depth (0); only a camera outside
+    // the room sees nothing (those pixels were black, half of every frame before takeoff).
+    const bool inside = t >= 0 && std::isfinite(t);  // (−0 ≥ 0)
+    if (!inside) t = 0;
     const Eigen::Vector3d x = c + t * d;
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     n[axis] = d[axis] > 0 ? -1 : 1;
@@ -146,7 +150,7 @@ void Renderer::render(const std::vector<DronePose>& drones, int viewer, Rendered
     }
     out->depth_true[i] = static_cast<float>(t);
     out->object_id[i] = kIdRoom;
-    out->gray[i] = t > 0 ? shade(albedo, n, d.normalized()) : 0;
+    out->gray[i] = inside ? shade(albedo, n, d.normalized()) : 0;
   }
 
   // 2. Obstacles inside their screen rectangles.

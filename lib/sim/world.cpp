@@ -374,9 +374,17 @@ std::string starts_error(const World& w) {
         return where + ": " + num((w.starts[j].position - s.position).norm()) + " m from start " + std::to_string(j) +
                " (drone " + std::to_string(w.starts[j].id) + "), closer than two drones' radii " + num(2 * r) + " m";
   }
-  // Every drone's hover height must fit under the ceiling, whether the file gave the range or not.
+  // Every drone's hover height, which counts from its takeoff spot, must fit under the ceiling,
+  // whether the file gave the range or not (a start on a box put its hover height out of reach:
+  // the drone sat at the ceiling and never counted as airborne; review, session 33).
   const DroneConfig& c = w.drone_config;
-  if (c.height_max > w.room_size.z() - r)
+  for (size_t i = 0; i < w.starts.size(); ++i)
+    if (w.starts[i].position.z() + c.height_max > w.room_size.z() - r)
+      return "start " + std::to_string(i) + " (drone " + std::to_string(w.starts[i].id) + "): takeoff at z = " +
+             num(w.starts[i].position.z()) + " m plus drones.height max " + num(c.height_max) +
+             " m is above the ceiling " + num(w.room_size.z()) +
+             " m less the drone's radius (set drones.height, a lower start or a higher room)";
+  if (c.height_max > w.room_size.z() - r)  // (random starts, placed later on the floor)
     return "drones.height max " + num(c.height_max) + " m is above the ceiling " + num(w.room_size.z()) +
            " m less the drone's radius (set drones.height or a higher room)";
   return "";

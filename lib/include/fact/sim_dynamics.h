@@ -2,11 +2,11 @@
 // motions (library fact_sim). Plain data and small functions, no I/O.
 //
 // Frames: world w (z up); drone i's odometry frame f_i = the takeoff spot o_i with yaw θ_i.
-// VIO (what the drone believes, in f_i):
-//   vio_pos = R_z(−θ_i)(p − o_i) + d_p(t),  vio_yaw = yaw − θ_i + d_y(t),  vio_vel = R_z(−θ_i) v
+// VIO (what the drone believes, in f_i) is a rigid frame of yaw φ = θ_i − d_y(t) in the world:
+//   vio_pos = R_z(−φ)(p − o_i) + d_p(t),  vio_yaw = yaw − φ = yaw − θ_i + d_y(t),  vio_vel = R_z(−φ) v
 // with d_p (3) and d_y random walks of σ = VioDrift::position / ::yaw per √s.
 // The flight controller works in f_i on VIO; its commanded acceleration a_f (f_i) acts in the
-// world as R_z(θ_i + d_y(t)) · a_f.
+// world as R_z(φ) · a_f.
 #pragma once
 
 #include "fact/sim_world.h"
@@ -41,6 +41,15 @@ struct Setpoint {
 };
 // "" or the first non-finite field, e.g. "position[1] = nan".
 std::string setpoint_error(const Setpoint& sp);
+
+// Magnitudes no quadrotor in a room can mean (a scrambled or unit-confused sender), refused on
+// LCM and MAVLink alike; a finite 1e200 used to make the controller's clamp command nothing.
+constexpr double kMaxSetpointPosition = 1000;      // m, each axis
+constexpr double kMaxSetpointVelocity = 100;       // m/s, each axis
+constexpr double kMaxSetpointAcceleration = 100;   // m/s², each axis
+constexpr double kMaxSetpointYawRate = 100;        // rad/s
+// "" or the first field beyond those limits, e.g. "position[0] = 1e+200 (|position| <= 1000 m)".
+std::string setpoint_range_error(const Setpoint& sp);
 
 // What the VIO reports (in f_i) plus the IMU attitude.
 struct VioSample {
