@@ -91,8 +91,9 @@ while [ "$#" -gt 0 ]; do
   esac
 done
 is_uint() { [[ "$1" =~ ^[0-9]+$ ]]; }
-[ -z "$drones" ] || { is_uint "$drones" && [ "$drones" -ge 2 ] && [ "$drones" -le 32 ]; } ||
+[ -z "$drones" ] || { is_uint "$drones" && [ "${#drones}" -le 9 ] && [ "$((10#$drones))" -ge 2 ] && [ "$((10#$drones))" -le 32 ]; } ||
   die_usage "--drones: expected an integer 2..32, got '$drones'"
+[ -z "$drones" ] || drones=$((10#$drones))  # decimal for fact-sim too ("010" is 10, not octal 8)
 is_uint "$seed" && [ "${#seed}" -le 9 ] || die_usage "--seed: expected an integer 0..999999999, got '$seed'"
 seed=$((10#$seed))  # decimal even with leading zeros ("08" is not octal here)
 case "$resolution" in 640x480|424x240) ;; *) die_usage "--resolution: expected 640x480 or 424x240, got '$resolution'" ;; esac
@@ -221,19 +222,30 @@ MAV_BASE=14600     # the simulated flight controllers listen on MAV_BASE + id (i
 BRIDGE_BASE=14300  # each fact-fc-bridge binds BRIDGE_BASE + id: never one of the simulator's ports
 prefix="fact-run-$$"
 sim_addr=127.0.0.1
+# Bus logs kept by an earlier run whose merge failed (or warned) are not thrown away.
+if compgen -G "$out/logs/bus-*.lcm" >/dev/null; then
+  echo "run-sim: $out/logs holds bus logs an earlier run kept (its merge failed or warned); move them away or use another --out" >&2
+  exit 2
+fi
 rm -rf "$out/logs"
 mkdir -p "$out/logs"
 rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-params.txt"
 
 pids=() names=() logger_pids=() bus_logs=()
 # merge_logs: stops the recorders and merges their bus logs into run.lcm (the bus logs go once it
-# is written). False, keeping the bus logs and no run.lcm, when the merge fails.
+# is written, unless the merge warned: a torn last event, shown here). False, keeping the bus logs
+# and no run.lcm, when the merge fails.
 merge_logs() {
   for pid in "${logger_pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
   for pid in "${logger_pids[@]}"; do wait "$pid" 2>/dev/null || true; done
   logger_pids=()
   if "$bin_mrg" --output "$out/run.lcm" "${bus_logs[@]}" >"$out/logs/fact-log-merge.log" 2>&1; then
-    rm -f "${bus_logs[@]}"
+    if grep -q "warning" "$out/logs/fact-log-merge.log"; then
+      cat "$out/logs/fact-log-merge.log" >&2
+      echo "run-sim: the merge warned; the bus logs are kept in $out/logs" >&2
+    else
+      rm -f "${bus_logs[@]}"
+    fi
     return 0
   fi
   rm -f "$out/run.lcm"

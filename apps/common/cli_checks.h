@@ -23,17 +23,27 @@ inline CLI::Validator uint64_text() {
       "UINT64");
 }
 
-// Every option of `app` that takes a value refuses an empty one. CLI11 assigns a default-constructed
-// value for an empty string ("--drone-id ''" ran the app as drone 0, "--rounds ''" used every round,
-// "--noise-floor ''" set 0): a script whose variable was unset would run on a number nobody gave.
-// No flag gives "" a meaning. Call after the options are added, before parsing; flags (no value)
-// and --help are left alone.
-inline void refuse_empty_values(CLI::App& app) {
-  const CLI::Validator non_empty(
-      [](std::string& s) { return s.empty() ? std::string("expected a value, got an empty string") : std::string(); },
+// Every option of `app` that takes a value refuses an empty value and an integer written with a
+// leading zero. CLI11 assigns a default-constructed value for an empty string ("--drone-id ''" ran
+// the app as drone 0, "--rounds ''" used every round, "--noise-floor ''" set 0): a script whose
+// variable was unset would run on a number nobody gave. And it reads integers in C's bases:
+// "--drone-id 010" ran as drone 8 and "--port 010" listened on port 8 (review, session 33). No
+// flag gives "" a meaning; a file literally named 010 is still reachable as ./010. Call after the
+// options are added, before parsing; flags (no value) and --help are left alone.
+inline void refuse_unclear_values(CLI::App& app) {
+  const CLI::Validator clear(
+      [](std::string& s) {
+        if (s.empty()) return std::string("expected a value, got an empty string");
+        const size_t digits = s.find_first_not_of("+-");
+        const bool leading_zero = digits != std::string::npos && s.size() > digits + 1 && s[digits] == '0' &&
+                                  s.find_first_not_of("0123456789", digits) == std::string::npos;
+        if (leading_zero) return "'" + s + "' has a leading zero, which would read as octal: write it without (./" + s +
+                                 " for a file)";
+        return std::string();
+      },
       "");
   for (CLI::Option* option : app.get_options())
-    if (option->get_type_size() != 0) option->check(non_empty);
+    if (option->get_type_size() != 0) option->check(clear);
 }
 
 }  // namespace fact::app

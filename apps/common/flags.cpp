@@ -68,7 +68,7 @@ bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeou
 
 int parse_flags(CLI::App& cli, int argc, char** argv, const char* app, const std::function<void()>& check) {
   try {
-    refuse_empty_values(cli);
+    refuse_unclear_values(cli);
     cli.parse(argc, argv);
     check();
     return -1;

@@ -2,8 +2,10 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <vector>
 
 namespace fact::app {
 
@@ -17,6 +19,41 @@ uint64_t big_endian(const unsigned char* p, int bytes) {
   uint64_t v = 0;
   for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
   return v;
+}
+
+// The byte offset of the first sync word (0xEDA1DA01, big-endian) at or after `from`, or −1; reads
+// `file` to its end in 1 MiB pieces (the file position is left there).
+int64_t find_sync_word(std::FILE* file, int64_t from) {
+  static const unsigned char kSync[4] = {0xED, 0xA1, 0xDA, 0x01};
+  if (std::fseek(file, static_cast<long>(from), SEEK_SET) != 0) return -1;
+  std::vector<unsigned char> buf(1 << 20);
+  size_t kept = 0;  // the last 3 bytes of the previous piece, at the front of buf
+  int64_t base = from;
+  for (;;) {
+    const size_t n = std::fread(buf.data() + kept, 1, buf.size() - kept, file);
+    const size_t have = kept + n;
+    const auto hit = std::search(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(have), kSync, kSync + 4);
+    if (hit != buf.begin() + static_cast<std::ptrdiff_t>(have)) return base + (hit - buf.begin());
+    if (n == 0) return -1;
+    kept = std::min<size_t>(3, have);
+    std::copy(buf.begin() + static_cast<std::ptrdiff_t>(have - kept), buf.begin() + static_cast<std::ptrdiff_t>(have),
+              buf.begin());
+    base += static_cast<int64_t>(have - kept);
+  }
+}
+
+// The byte offset of the first event header at or after `from`: a sync word followed by a channel
+// length of 1 … 999 and a data length ≥ 0 (so that four bytes of a message's data that happen to
+// read 0xEDA1DA01 are not taken for one), or −1.
+int64_t next_event_header(std::FILE* file, int64_t from) {
+  for (int64_t at = find_sync_word(file, from); at >= 0; at = find_sync_word(file, at + 1)) {
+    unsigned char h[kHeaderBytes];
+    if (std::fseek(file, static_cast<long>(at), SEEK_SET) != 0 || std::fread(h, 1, sizeof h, file) != sizeof h) return -1;
+    const auto channel_len = static_cast<int32_t>(big_endian(h + 20, 4));
+    const auto data_len = static_cast<int32_t>(big_endian(h + 24, 4));
+    if (channel_len >= 1 && channel_len <= kLongestChannel && data_len >= 0) return at;
+  }
+  return -1;
 }
 }  // namespace
 
@@ -71,10 +108,19 @@ bool LogReader::next(lcm::LogEvent* event) {
   const int64_t left = size_ - offset_ - kHeaderBytes;
   if (static_cast<int64_t>(channel_len) + data_len > left) {
     // The file ends inside this event. With a plausible length (at most 64 MiB: the largest
-    // messages, frames, are about 1 MB) that is a recorder stopped mid-write; beyond it, damage.
-    if (data_len <= kLargestMessage)
+    // messages, frames, are about 1 MB) and no event after it, that is a recorder stopped
+    // mid-write; beyond it, or with another event's sync word in the bytes left, the length is
+    // damaged (one flipped bit in a length in mid-log was taken for a torn end, and the rest of
+    // the log dropped with a warning; review, session 33).
+    const int64_t next = data_len <= kLargestMessage ? next_event_header(file_, offset_ + kHeaderBytes) : -1;
+    if (data_len <= kLargestMessage && next < 0)
       return tear(std::to_string(left) + " of its " + std::to_string(channel_len + static_cast<int64_t>(data_len)) +
                   " channel and data bytes");
+    if (next >= 0) {
+      error_ = at + ": data length " + std::to_string(data_len) + " runs past the end of the file, but another event " +
+               "starts at byte " + std::to_string(next) + " (a damaged length, not a torn last event)";
+      return false;
+    }
     error_ = at + ": data length " + std::to_string(data_len) + " is beyond the " + std::to_string(left) +
              " bytes left in the file";
     return false;

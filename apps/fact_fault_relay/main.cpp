@@ -302,7 +302,7 @@ int main(int argc, char** argv) {
   cli.add_option("--status-period", f.status_period, "s between status messages (0.001 … 3600)")->capture_default_str();
   cli.footer("Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.");
   try {
-    fact::app::refuse_empty_values(cli);
+    fact::app::refuse_unclear_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -519,7 +519,7 @@ int main(int argc, char** argv) {
       "kind|sender|seq|payload. Make a key: head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \\n' > swarm.key\n"
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.");
   try {
-    fact::app::refuse_empty_values(cli);
+    fact::app::refuse_unclear_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

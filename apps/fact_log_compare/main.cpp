@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
   cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
              "that lost messages (fewer results or rounds of a compared drone than its apps' status counters grew by in it).");
   try {
-    fact::app::refuse_empty_values(cli);
+    fact::app::refuse_unclear_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   cli.add_option("inputs", inputs, "The logs to merge")->required()->type_name("LOG");
   cli.footer("Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags or an unreadable input.");
   try {
-    fact::app::refuse_empty_values(cli);
+    fact::app::refuse_unclear_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
   add_flags(app, options);
   app.get_formatter()->column_width(30);
   try {
-    fact::app::refuse_empty_values(app);
+    fact::app::refuse_unclear_values(app);
     app.parse(argc, argv);
     check(options);
     return run(options);

@@ -755,7 +755,7 @@ int main(int argc, char** argv) {
   Options o;
   add_flags(cli, o);
   try {
-    fact::app::refuse_empty_values(cli);
+    fact::app::refuse_unclear_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -241,7 +241,7 @@ int main(int argc, char** argv) {
   add_sensor_options(app, command);
   add_file_options(app, command);
   try {
-    fact::app::refuse_empty_values(app);
+    fact::app::refuse_unclear_values(app);
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help
     return app.exit(e);

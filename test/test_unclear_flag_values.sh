@@ -1,0 +1,31 @@
+#!/bin/bash
+# Every app refuses an empty flag value and an integer with a leading zero (CLI11 alone read "" as
+# 0 and "010" as octal 8: "--drone-id ''" ran as drone 0, "--drone-id 010" as drone 8). Each
+# argument is BINARY=FLAG; the app runs with FLAG "" and with FLAG 010 and must exit 2 before doing
+# anything else, naming the flag and what is wrong with the value.
+#
+#   test/test_unclear_flag_values.sh BINARY=FLAG...
+set -u
+[ "$#" -gt 0 ] || { echo "usage: $0 BINARY=FLAG..." >&2; exit 2; }
+failures=0 runs=0
+check() {  # check BINARY FLAG VALUE EXPECTED_TEXT
+  local name rc=0 err
+  name=$(basename "$1")
+  runs=$((runs + 1))
+  err=$(timeout 30 "$1" "$2" "$3" </dev/null 2>&1 >/dev/null) || rc=$?
+  if [ "$rc" -ne 2 ]; then
+    echo "FAIL $name $2 '$3': exit $rc, expected 2; stderr: $err" >&2
+    failures=$((failures + 1))
+  elif ! grep -qF -- "$2: $4" <<<"$err"; then
+    echo "FAIL $name $2 '$3': stderr does not say '$2: $4': $err" >&2
+    failures=$((failures + 1))
+  else
+    echo "ok   $name $2 '$3': $err"
+  fi
+}
+for pair in "$@"; do
+  binary=${pair%=*} flag=${pair##*=}
+  check "$binary" "$flag" "" "expected a value, got an empty string"
+  check "$binary" "$flag" "010" "'010' has a leading zero, which would read as octal"
+done
+[ "$failures" -eq 0 ] || { echo "test_unclear_flag_values: $failures of $runs failed" >&2; exit 1; }
