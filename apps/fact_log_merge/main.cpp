@@ -10,8 +10,9 @@
 // and events with equal timestamps keep the order of the inputs. An input that ends in a cut-off
 // event (a logger stopped mid-write) contributes every whole event before it (with a warning).
 // Inputs are read with fact::app::LogReader: a damaged input (a wrong sync word, an impossible
-// length) is an error, never a silent early end. The output is written to OUTPUT.partial and
-// renamed when complete, and may not be one of the inputs.
+// length) is an error, never a silent early end. The output is written to OUTPUT.partial-XXXXXX
+// and renamed when complete, and may not be one of the inputs; no input may be given twice. An
+// input whose timestamps go back is merged as it is, with a warning.
 // Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags, an input that cannot be
 // read, is damaged or is not an LCM log, or the output named as an input (nothing is written then).
 #include "common/cli_checks.h"
@@ -21,7 +22,12 @@
 #include <lcm/lcm-cpp.hpp>
 #include <sys/stat.h>
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -41,6 +47,7 @@ struct Input {
   std::string data;
   int64_t timestamp = 0;
   bool ended = false;
+  int64_t backwards = 0;  // events stamped earlier than the one before (a recorder's clock set back)
 
   void advance() {
     lcm::LogEvent e;
@@ -48,6 +55,7 @@ struct Input {
       ended = true;
       return;
     }
+    if (log->events() > 1 && e.timestamp < timestamp) ++backwards;
     channel = e.channel;
     data.assign(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
     timestamp = e.timestamp;
@@ -82,6 +90,12 @@ int main(int argc, char** argv) {
                 << "): it would be overwritten before it is read\n";
       return 2;
     }
+    for (size_t j = 0; j < i; ++j)
+      if (same_file(inputs[i], inputs[j])) {  // (its events would be merged twice)
+        std::cerr << kApp << ": error: input " << i + 1 << " (" << inputs[i] << ") is input " << j + 1 << " ("
+                  << inputs[j] << ") again\n";
+        return 2;
+      }
     in[i].path = inputs[i];
     in[i].log = std::make_unique<fact::app::LogReader>();
     if (const std::string e = in[i].log->open(inputs[i]); !e.empty()) {
@@ -90,9 +104,16 @@ int main(int argc, char** argv) {
     }
     in[i].advance();
   }
-  // Written to OUTPUT.partial and renamed at the end: a damaged input or a failed write leaves
-  // nothing at OUTPUT.
-  const std::string partial = output + ".partial";
+  // Written to a fresh OUTPUT.partial-XXXXXX (mkstemp: never an existing file, such as an input
+  // named OUTPUT.partial, which was truncated and removed) and renamed at the end: a damaged input
+  // or a failed write leaves nothing at OUTPUT.
+  std::string partial = output + ".partial-XXXXXX";
+  const int partial_fd = ::mkstemp(partial.data());
+  if (partial_fd < 0) {
+    std::cerr << kApp << ": error: cannot write " << output << ".partial-*: " << std::strerror(errno) << "\n";
+    return 1;
+  }
+  ::close(partial_fd);
   const auto fail = [&](int code, const std::string& why) {
     std::cerr << kApp << ": error: " << why << "\n";
     std::remove(partial.c_str());
@@ -126,6 +147,10 @@ int main(int argc, char** argv) {
   for (const Input& i : in) {
     if (!i.log->error().empty()) return fail(2, "the LCM log is damaged: " + i.log->error() + " (nothing written)");
     if (i.log->torn()) std::cerr << kApp << ": warning: " << i.log->note() << "\n";
+    if (i.backwards > 0)
+      std::cerr << kApp << ": warning: " << i.path << ": " << i.backwards << " event(s) stamped earlier than the one "
+                << "before (its recorder's clock was set back?): the merge is in timestamp order only where the "
+                << "inputs are\n";
     counts += (counts.empty() ? "" : ", ") + i.path + " " + std::to_string(i.log->events());
     if (i.log->events() == 0 && std::filesystem::file_size(i.path) > 0)
       return fail(2, i.path + " is not an LCM log (no event in its " + std::to_string(std::filesystem::file_size(i.path)) +
