@@ -164,6 +164,17 @@ FilterResult OdometryFilter::push(const OdometryInput& in) {
     if (std::abs(in.position[i]) > options_.max_position)
       return reject(Rejection::out_of_range, "position[" + std::to_string(i) + "] = " + number(in.position[i]) +
                                                  " m is beyond ±" + number(options_.max_position) + " m");
+  // A reported velocity beyond twice max_speed, or an attitude outside its range (pitch in
+  // [−π/2, π/2], roll in [−π, π]), is no drone's (review, session 33: 1e300 m/s and a pitch of
+  // −40 rad were published; the planner dropped such samples whole, the detector used them).
+  if (in.has_velocity && in.velocity.norm() > 2 * options_.max_speed)
+    return reject(Rejection::out_of_range, "velocity |(" + number(in.velocity.x()) + ", " + number(in.velocity.y()) +
+                                               ", " + number(in.velocity.z()) + ")| m/s is beyond twice max_speed " +
+                                               number(options_.max_speed) + " m/s");
+  if (std::abs(in.pitch) > kPi / 2 + 1e-9)
+    return reject(Rejection::out_of_range, "pitch = " + number(in.pitch) + " rad is outside [-pi/2, pi/2]");
+  if (std::abs(in.roll) > kPi + 1e-9)
+    return reject(Rejection::out_of_range, "roll = " + number(in.roll) + " rad is outside [-pi, pi]");
 
   OdometryOutput out;
   out.utime = std::llround(in.utime);

@@ -381,6 +381,32 @@ TEST(OdometryFilter, KeepsTheSourcesVelocity) {
   EXPECT_EQ(f.push(in).output.velocity, Eigen::Vector3d(4.9, 0, 0));
 }
 
+// A finite velocity or attitude no drone can have is out of range (review, session 33: a velocity
+// of 1e300 m/s and a pitch of −40 rad were published).
+TEST(OdometryFilter, RejectsVelocityAndAttitudeOutOfRange) {
+  fact::OdometryFilter f;  // max_speed 10 m/s
+  fact::OdometryInput in = sample(1.0, 0, 0, 0, 0);
+  in.has_velocity = true;
+  in.velocity = Eigen::Vector3d(1e300, 0, 0);
+  fact::FilterResult r = f.push(in);
+  EXPECT_EQ(r.rejection, fact::Rejection::out_of_range);
+  EXPECT_NE(r.detail.find("is beyond twice max_speed 10 m/s"), std::string::npos) << r.detail;
+  in.velocity = Eigen::Vector3d(0, 19.9, 0);  // within twice max_speed
+  EXPECT_TRUE(f.push(in).accepted());
+  in = sample(1.1, 0, 0, 0, 0);
+  in.pitch = -40;
+  r = f.push(in);
+  EXPECT_EQ(r.rejection, fact::Rejection::out_of_range);
+  EXPECT_EQ(r.detail, "pitch = -40 rad is outside [-pi/2, pi/2]");
+  in.pitch = 0;
+  in.roll = 50;
+  EXPECT_EQ(f.push(in).detail, "roll = 50 rad is outside [-pi, pi]");
+  in.roll = -3.1;
+  in.pitch = 1.5;
+  EXPECT_TRUE(f.push(in).accepted());
+  EXPECT_EQ(f.count(fact::Rejection::out_of_range), 3);
+}
+
 TEST(OdometryFilter, PoseLinesThroughTheFilter) {
   fact::OdometryFilter f;
   fact::FilterResult r = f.push(pose(100.0, 1, 2, 3, 3.0, 0.1, -0.2));

@@ -19,6 +19,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -34,6 +35,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "common/app.h"
+#include "fact/sim_clock_t.hpp"
 #include "fact/app_status_t.hpp"
 #include "fact/odometry_t.hpp"
 #include "app_process.h"
@@ -219,6 +221,62 @@ TEST_F(VioRelayLcm, TumReplayInRealTimeAndRestamped) {
     EXPECT_NEAR(odo[k].velocity[0], k == 0 ? 0.0 : 1.0, 1e-9);
   }
   EXPECT_GT(odo[4].yaw, kPi);
+}
+
+// --sim-clock with a tum replay: the relay handles the clock's ticks while it replays, so its
+// heartbeat keeps time with the simulation (review, session 33: the tum and udp sources never
+// handled LCM, the clock stood at its first tick, and a 23 s replay sent two heartbeats).
+TEST_F(VioRelayLcm, TumReplayFollowsTheSimulationClock) {
+  const fs::path tum = dir_ / "slow.tum";  // 3 s of a level drone at 0.1 m/s, 10 samples a second
+  {
+    std::ofstream f(tum);
+    for (int k = 0; k <= 30; ++k) f << 0.1 * k << " " << 0.01 * k << " 0 1 0 0 0 1\n";
+  }
+  Listener l(url(7707), "FACT_ODOMETRY_0");
+  ASSERT_TRUE(l.good());
+  const int64_t epoch = 1700000000000000;  // µs: the simulation clock runs at wall speed from here
+  const auto start = std::chrono::steady_clock::now();
+  const auto tick = [&] {
+    fact::sim_clock_t c{};
+    c.utime = epoch + std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
+    c.rate = 1;
+    l.lcm().publish("FACT_SIM_CLOCK", &c);
+  };
+  Relay relay({"--source", "tum", "--file", tum.string(), "--rate", "1", "--restamp", "--sim-clock", "--lcm-url", url(7707)},
+              dir_, "relay");
+  ASSERT_TRUE(l.pump_until([&] {
+    tick();
+    return l.has_state(0, "finished");
+  })) << relay.err();
+  EXPECT_EQ(relay.wait(), 0) << relay.err();
+  ASSERT_EQ(l.odometry().size(), 31u) << relay.err();
+  EXPECT_GE(l.odometry()[0].utime, epoch);  // restamped onto the simulation clock
+  EXPECT_LT(l.odometry()[0].utime, epoch + 10000000);
+  const auto statuses = l.statuses(0);
+  ASSERT_FALSE(statuses.empty());
+  // One heartbeat a second of simulation time, and their times span the replay.
+  EXPECT_GE(statuses.size(), 4u) << relay.err();
+  EXPECT_GE(statuses.back().utime - statuses.front().utime, 2500000) << relay.err();
+}
+
+// Publishes that fail (the network gone: lo down in this test's private namespace) are counted,
+// reported in the summary, and make the exit code 1, as the help promises (review, session 33:
+// 19 of 30 failed, "published 11", exit 0).
+TEST_F(VioRelayLcm, FailedPublishesExitOne) {
+  const fs::path tum = dir_ / "slow.tum";  // 2 s, 10 samples a second
+  {
+    std::ofstream f(tum);
+    for (int k = 0; k <= 20; ++k) f << 0.1 * k << " " << 0.01 * k << " 0 1 0 0 0 1\n";
+  }
+  Relay relay({"--source", "tum", "--file", tum.string(), "--rate", "1", "--lcm-url", url(7708)}, dir_, "relay");
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  ASSERT_EQ(std::system("ip link set lo down"), 0);
+  const int code = relay.wait();
+  ASSERT_EQ(std::system("ip link set lo up"), 0);
+  const std::string err = relay.err();
+  EXPECT_EQ(code, 1) << err;
+  EXPECT_NE(err.find("publish_failed"), std::string::npos) << err;
+  EXPECT_NE(err.find("publish(es) failed"), std::string::npos) << err;
 }
 
 // Sends one datagram to 127.0.0.1:port.
@@ -503,6 +561,7 @@ TEST_F(VioRelayTest, BadFlagsExitTwoWithTheReason) {
       {{"--max-yaw-rate", "-3"}, "--max-yaw-rate: expected a finite number > 0, got -3"},
       {{"--drone-id", "-1"}, "--drone-id: expected an id >= 0, got -1"},
       {{"--input-channel", "X", "--output-channel", "X"}, "the relay would feed itself"},
+      {{"--status-channel", "FACT_VIO_RAW_0"}, "the relay would read its own heartbeats"},
       {{"--rate", "abc"}, "--rate"},
       {{"--bogus"}, "--bogus"},
   };

@@ -57,7 +57,8 @@ enum class Rejection {
   jump,          // faster than max_speed or max_yaw_rate        "rejected_jump"
   bad_attitude,  // unusable quaternion (see attitude_from_…)    "rejected_attitude"
   malformed,     // a pose line that does not parse              "rejected_malformed"
-  out_of_range,  // |position| beyond max_position               "rejected_range"
+  out_of_range,  // |position| beyond max_position, |velocity|    "rejected_range"
+                 // beyond 2·max_speed, pitch outside [−π/2, π/2] or roll outside [−π, π]
 };
 constexpr int kNumRejections = 8;
 const char* counter_name(Rejection r);  // the names above; "published" for none
