@@ -31,6 +31,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$here/scripts/lib/args.sh"
+. "$here/scripts/lib/netns.sh"
 
 die() { echo "replay: $*" >&2; exit 2; }
 [ "$#" -ge 1 ] || die "usage: scripts/replay.sh LOG [--out DIR] [--speed X] [--drones IDS] [--seed S] [--spin-rate R] [--max-rounds K] [--noise-quadratic Q] [--no-build]"
@@ -103,6 +104,14 @@ if [ -z "${FACT_REPLAY_INNER:-}" ]; then
 fi
 
 # ---------------------------------------------------------------- inside the private namespace
+# FACT_REPLAY_INNER is this script's own marker for its second pass; set by hand outside a private
+# namespace, the apps would talk udpm on the machine's interfaces (review, session 33).
+foreign=$(foreign_interfaces)
+if [ -n "$foreign" ]; then
+  echo "replay: FACT_REPLAY_INNER is set but this is not a private network namespace (interfaces: $foreign);" >&2
+  echo "  refusing to send multicast here. Unset it: replay.sh makes its own namespace." >&2
+  exit 125
+fi
 URL='udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152'
 B="$build_dir"
 for b in "$B/apps/fact-solver" "$B/apps/fact_planner/fact-planner" "$B/apps/fact-log-compare"; do

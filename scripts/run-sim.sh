@@ -26,6 +26,7 @@ set -euo pipefail
 [ -n "${FACT_RUN_SIM_TRACE:-}" ] && set -x  # FACT_RUN_SIM_TRACE=1: trace the script
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$here/scripts/lib/args.sh"
+. "$here/scripts/lib/netns.sh"
 
 usage() {
   sed -n '2,23p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
@@ -176,7 +177,7 @@ fi
 # must have no interface but lo yet (/proc/net/dev lists this namespace's interfaces; /sys/class/net
 # may still show the host's).
 case "$FACT_RUN_SIM_INNER" in netns|shared) ;; *) echo "run-sim: FACT_RUN_SIM_INNER='$FACT_RUN_SIM_INNER' is internal (netns or shared)" >&2; exit 125 ;; esac
-foreign=$(awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") printf "%s ", $1 }' /proc/net/dev)
+foreign=$(foreign_interfaces)
 if [ -n "$foreign" ]; then
   echo "run-sim: FACT_RUN_SIM_INNER is set but this is not a private network namespace (interfaces: $foreign);" >&2
   echo "  refusing to send multicast here. Unset it: run-sim.sh makes its own namespace." >&2

@@ -27,6 +27,16 @@ if [ -z "${FACT_LCM_SPY_IN_NETNS:-}" ]; then
   [ -f "$jar" ] || fail "jar $jar missing although the build should have made it"
   [ -x "$pub" ] || fail "publisher $pub missing"
   rm -rf "$out" && mkdir -p "$out" || fail "cannot create $out"
+  # Here, in this machine's own network namespace (it has interfaces besides lo), spy.sh refuses
+  # udpm before starting anything (review, session 33: it joined the group on the host's
+  # interfaces). A jar that does not exist makes a spy.sh without the guard stop at its jar
+  # check (exit 1), so even then lcm-spy never starts here.
+  if [ -n "$(awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") print $1 }' /proc/net/dev)" ]; then
+    rc=0
+    FACT_LCM_JAR=/nonexistent/fact.jar "$src/scripts/spy.sh" "$url" >"$out/host.log" 2>&1 || rc=$?
+    [ "$rc" -eq 2 ] || fail "spy.sh with udpm in the machine's namespace exited $rc, expected 2: $(cat "$out/host.log")"
+    grep -q "refusing udpm" "$out/host.log" || fail "spy.sh's refusal does not say why: $(cat "$out/host.log")"
+  fi
   FACT_LCM_SPY_IN_NETNS=1 exec "$src/scripts/netns-run.sh" bash "$0" "$@"
 fi
 

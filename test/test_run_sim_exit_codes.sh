@@ -4,7 +4,8 @@
 #   - a run too short for any result: 3 (not certified), report.json says no result;
 #   - an app killed during the run: 1, naming the app;
 #   - its internal FACT_RUN_SIM_INNER marker set by hand outside a private namespace: 125, and no
-#     app is started (multicast would otherwise reach the machine's interfaces);
+#     app is started (multicast would otherwise reach the machine's interfaces); the same for
+#     replay.sh's FACT_REPLAY_INNER;
 #   - a seed with a leading zero is decimal ("08"), not a bad octal number;
 #   - the solvers run with the range noise model of the simulated camera (0.005/m at 640x480),
 #     recorded in run-params.txt for replay.sh; a bad --noise-quadratic is refused (2), naming it.
@@ -90,6 +91,18 @@ if awk -F: 'NR > 2 { gsub(/ /, "", $1); if ($1 != "lo") found = 1 } END { exit !
   grep -q "not a private network namespace" "$OUT/marker.out" || fail "the refusal does not say why"
   [ ! -e "$OUT/marker/logs" ] || fail "apps were started outside a private namespace"
 fi
+# replay.sh's own marker (FACT_REPLAY_INNER) in a namespace that has an interface besides lo (a
+# veth made in a private namespace, so that nothing reaches the host even if the guard failed):
+# 125, naming the interface, and no app started.
+printf 'not read\n' >"$OUT/fake.lcm"
+rc=0
+"$REPO/scripts/netns-run.sh" bash -c "ip link add fact-rv0 type veth peer name fact-rv1 &&
+  FACT_REPLAY_INNER=1 BUILD_DIR='$BUILD' '$REPO/scripts/replay.sh' '$OUT/fake.lcm' --out '$OUT/replay-marker' --no-build" \
+  >"$OUT/replay-marker.out" 2>&1 || rc=$?
+[ "$rc" -eq 125 ] || { cat "$OUT/replay-marker.out"; fail "FACT_REPLAY_INNER outside a private namespace exited $rc, expected 125"; }
+grep -q "not a private network namespace (interfaces: fact-rv" "$OUT/replay-marker.out" ||
+  { cat "$OUT/replay-marker.out"; fail "replay.sh's refusal does not name the interface"; }
+[ ! -e "$OUT/replay-marker/logs" ] || fail "replay.sh started apps outside a private namespace"
 # 4. A run killed by SIGKILL (a ctest timeout) leaves no network namespace on the host: the ones
 # 'ip netns add' makes inside netns-run.sh live in its private mount namespace.
 if command -v ip >/dev/null 2>&1; then
@@ -98,4 +111,18 @@ if command -v ip >/dev/null 2>&1; then
   ! ip netns list 2>/dev/null | grep -q "$leak" || { ip netns del "$leak"; fail "a SIGKILLed run left namespace $leak"; }
   [ ! -e "/run/netns/$leak" ] || { rm -f "/run/netns/$leak"; fail "a SIGKILLed run left /run/netns/$leak"; }
 fi
-echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125, seed 08 read as 8, camera noise model used"
+# 5. Bus logs an earlier run kept (its merge failed or warned) are not thrown away: a run into the
+# same --out refuses to start (2) and leaves them (review, session 33: they were removed).
+mkdir -p "$OUT/kept/logs"
+printf 'kept\n' >"$OUT/kept/logs/bus-1.lcm"
+rc=0
+run_sim kept --max-sim-time 1 || rc=$?
+[ "$rc" -eq 2 ] || { cat "$OUT/kept.out"; fail "a run into an --out with kept bus logs exited $rc, expected 2"; }
+grep -q "holds bus logs an earlier run kept" "$OUT/kept.out" || { cat "$OUT/kept.out"; fail "the refusal does not say why"; }
+[ "$(cat "$OUT/kept/logs/bus-1.lcm")" = kept ] || fail "the kept bus log was removed"
+# 6. --drones with a leading zero is decimal for the apps too ("08" is 8; the apps refuse 08, and
+# read 010 as octal 8).
+rc=0
+run_sim drones08 --drones 08 --max-sim-time 1 || rc=$?
+grep -q "== 8 drones" "$OUT/drones08.out" || { cat "$OUT/drones08.out"; fail "--drones 08 did not run 8 drones (exit $rc)"; }
+echo "test_run_sim_exit_codes: no result 3, killed app 1, marker outside a namespace 125 (run-sim and replay), kept bus logs refused, --drones 08 is 8, seed 08 read as 8, camera noise model used"

@@ -47,7 +47,10 @@ struct Input {
   std::string data;
   int64_t timestamp = 0;
   bool ended = false;
-  int64_t backwards = 0;  // events stamped earlier than the one before (a recorder's clock set back)
+  // Events stamped over a second earlier than the one before: a recorder's clock set back. (Steps
+  // of a few µs are lcm-logger's own: it stamps on receipt, and its receive paths race.)
+  int64_t backwards = 0;
+  static constexpr int64_t kClockStepUs = 1000000;
 
   void advance() {
     lcm::LogEvent e;
@@ -55,7 +58,7 @@ struct Input {
       ended = true;
       return;
     }
-    if (log->events() > 1 && e.timestamp < timestamp) ++backwards;
+    if (log->events() > 1 && e.timestamp < timestamp - kClockStepUs) ++backwards;
     channel = e.channel;
     data.assign(static_cast<const char*>(e.data), static_cast<size_t>(e.datalen));
     timestamp = e.timestamp;
@@ -148,9 +151,9 @@ int main(int argc, char** argv) {
     if (!i.log->error().empty()) return fail(2, "the LCM log is damaged: " + i.log->error() + " (nothing written)");
     if (i.log->torn()) std::cerr << kApp << ": warning: " << i.log->note() << "\n";
     if (i.backwards > 0)
-      std::cerr << kApp << ": warning: " << i.path << ": " << i.backwards << " event(s) stamped earlier than the one "
-                << "before (its recorder's clock was set back?): the merge is in timestamp order only where the "
-                << "inputs are\n";
+      std::cerr << kApp << ": warning: " << i.path << ": " << i.backwards << " event(s) stamped over 1 s earlier than "
+                << "the one before (its recorder's clock was set back?): the merge is in timestamp order only where "
+                << "the inputs are\n";
     counts += (counts.empty() ? "" : ", ") + i.path + " " + std::to_string(i.log->events());
     if (i.log->events() == 0 && std::filesystem::file_size(i.path) > 0)
       return fail(2, i.path + " is not an LCM log (no event in its " + std::to_string(std::filesystem::file_size(i.path)) +
