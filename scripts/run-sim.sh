@@ -234,14 +234,14 @@ rm -f "$out/run.lcm" "$out/run.png" "$out/report.json" "$out/cpu.csv" "$out/run-
 
 pids=() names=() logger_pids=() bus_logs=()
 # merge_logs: stops the recorders and merges their bus logs into run.lcm (the bus logs go once it
-# is written, unless the merge warned: a torn last event, shown here). False, keeping the bus logs
-# and no run.lcm, when the merge fails.
+# is written, unless the merge warned of damage: a torn last event or a clock set back, shown here;
+# an empty bus log is no loss). False, keeping the bus logs and no run.lcm, when the merge fails.
 merge_logs() {
   for pid in "${logger_pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
   for pid in "${logger_pids[@]}"; do wait "$pid" 2>/dev/null || true; done
   logger_pids=()
   if "$bin_mrg" --output "$out/run.lcm" "${bus_logs[@]}" >"$out/logs/fact-log-merge.log" 2>&1; then
-    if grep -q "warning" "$out/logs/fact-log-merge.log"; then
+    if grep "^fact-log-merge: warning:" "$out/logs/fact-log-merge.log" | grep -qv " is empty$"; then
       cat "$out/logs/fact-log-merge.log" >&2
       echo "run-sim: the merge warned; the bus logs are kept in $out/logs" >&2
     else

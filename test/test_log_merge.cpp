@@ -1,6 +1,7 @@
 // fact-log-merge: LCM logs of several buses into one, in timestamp order (scripts/run-sim.sh).
 // The app runs as a process on logs written here with lcm::LogFile; its output is read back.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -127,6 +128,16 @@ TEST_F(LogMerge, RepeatedInputsPartialNamesAndClockStepsBack) {
   EXPECT_EQ(twice.code, 2) << twice.out;
   EXPECT_NE(twice.out.find("input 2 (" + (dir_ / "link.lcm").string() + ") is input 1"), std::string::npos) << twice.out;
   EXPECT_FALSE(fs::exists(dir_ / "run.lcm"));
+
+  // The output gets what a new file gets (0666 less the umask), or the old output's mode: the
+  // partial file's own 0600 (mkstemp) made run.lcm unreadable to others (review, session 33).
+  const mode_t mask = ::umask(022);
+  ASSERT_EQ(merge("--output " + (dir_ / "new.lcm").string() + " " + (dir_ / "a.lcm").string()).code, 0);
+  EXPECT_EQ(fs::status(dir_ / "new.lcm").permissions(), fs::perms(0644));
+  fs::permissions(dir_ / "new.lcm", fs::perms(0640));
+  ASSERT_EQ(merge("--output " + (dir_ / "new.lcm").string() + " " + (dir_ / "a.lcm").string()).code, 0);
+  EXPECT_EQ(fs::status(dir_ / "new.lcm").permissions(), fs::perms(0640));
+  ::umask(mask);
 
   write_log(dir_ / "run.lcm.partial", {{20, "P", "p1"}});
   const Ran partial = merge("--output " + (dir_ / "run.lcm").string() + " " + (dir_ / "a.lcm").string() + " " +

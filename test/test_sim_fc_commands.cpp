@@ -45,6 +45,10 @@ TEST(SimFcCommands, DisarmOnlyOnTheFloorOrTheSpotItTookOffFrom) {
   f.command(mav::kCmdComponentArmDisarm, 0, d);
   EXPECT_TRUE(f.fc.armed()) << "disarmed 1.76 m above the floor, off its start";
   EXPECT_EQ(f.status.value("fc_command_denied"), 1);
+  d.p = {0.05, 0, 0.9};  // above the floor, below the start spot (review: that passed as on it)
+  f.command(mav::kCmdComponentArmDisarm, 0, d);
+  EXPECT_TRUE(f.fc.armed()) << "disarmed 0.9 m above the floor, 0.85 m below its start";
+  EXPECT_EQ(f.status.value("fc_command_denied"), 2);
   d.p = {0.05, 0, 1.76};  // back on the box
   f.command(mav::kCmdComponentArmDisarm, 0, d);
   EXPECT_FALSE(f.fc.armed());

@@ -1,12 +1,14 @@
 #!/bin/bash
-# Every app refuses an empty flag value and an integer with a leading zero (CLI11 alone read "" as
-# 0 and "010" as octal 8: "--drone-id ''" ran as drone 0, "--drone-id 010" as drone 8). Each
-# argument is BINARY=FLAG; the app runs with FLAG "" and with FLAG 010 and must exit 2 before doing
-# anything else, naming the flag and what is wrong with the value.
+# Every app refuses an empty flag value, and an integer flag refuses a value that is not a plain
+# decimal integer (CLI11 alone read "" as 0 and "010", " 010" or "0x10" in C's bases:
+# "--drone-id ''" ran as drone 0, "--drone-id 010" as drone 8). Each argument is BINARY=FLAG:int
+# (an integer flag: "", "010", " 010" and "0x10" are each refused) or BINARY=FLAG:text (any other:
+# "" is refused). The app must exit 2 before doing anything else, naming the flag and what is
+# wrong with the value.
 #
-#   test/test_unclear_flag_values.sh BINARY=FLAG...
+#   test/test_unclear_flag_values.sh BINARY=FLAG:int|text...
 set -u
-[ "$#" -gt 0 ] || { echo "usage: $0 BINARY=FLAG..." >&2; exit 2; }
+[ "$#" -gt 0 ] || { echo "usage: $0 BINARY=FLAG:int|text..." >&2; exit 2; }
 failures=0 runs=0
 check() {  # check BINARY FLAG VALUE EXPECTED_TEXT
   local name rc=0 err
@@ -23,9 +25,14 @@ check() {  # check BINARY FLAG VALUE EXPECTED_TEXT
     echo "ok   $name $2 '$3': $err"
   fi
 }
-for pair in "$@"; do
-  binary=${pair%=*} flag=${pair##*=}
+for case_ in "$@"; do
+  binary=${case_%=*} rest=${case_##*=}
+  flag=${rest%:*} kind=${rest##*:}
   check "$binary" "$flag" "" "expected a value, got an empty string"
-  check "$binary" "$flag" "010" "'010' has a leading zero, which would read as octal"
+  if [ "$kind" = int ]; then
+    check "$binary" "$flag" "010" "'010' has a leading zero, which would read as octal"
+    check "$binary" "$flag" " 010" "expected a decimal integer, got ' 010'"
+    check "$binary" "$flag" "0x10" "expected a decimal integer, got '0x10'"
+  fi
 done
 [ "$failures" -eq 0 ] || { echo "test_unclear_flag_values: $failures of $runs failed" >&2; exit 1; }

@@ -10,40 +10,51 @@
 
 namespace fact::app {
 
-// For flags read into std::uint64_t (seeds). CLI11 itself turned "-1" into 2^64 − 1 and saturated
-// larger numbers, so two different seeds ran as the same one (review, session 32).
+// "" when `s` is a plain decimal integer (an optional sign, then digits, the first not 0 unless it
+// is the only one), else why not. CLI11 converts integers with strtoll in base 0 after skipping
+// white space: "010" was octal 8 (--drone-id 010 ran as drone 8, --port 010 listened on 8),
+// " 010" too, and "0x10" 16 (review, session 33).
+inline std::string decimal_integer_error(const std::string& s) {
+  if (s.empty()) return "expected a value, got an empty string";  // (as refuse_empty_values says it)
+  const size_t digits = s.empty() || (s[0] != '+' && s[0] != '-') ? 0 : 1;
+  if (digits == s.size() || s.find_first_not_of("0123456789", digits) != std::string::npos)
+    return "expected a decimal integer, got '" + s + "'";
+  if (s[digits] == '0' && s.size() > digits + 1)
+    return "'" + s + "' has a leading zero, which would read as octal: write it without";
+  return "";
+}
+
+// For every flag read into an integer: a plain decimal integer (decimal_integer_error).
+inline CLI::Validator decimal_integer() {
+  return CLI::Validator([](std::string& s) { return decimal_integer_error(s); }, "");
+}
+
+// For flags read into std::uint64_t (seeds): a decimal integer in [0, 2^64 − 1]. CLI11 itself
+// turned "-1" into 2^64 − 1 and saturated larger numbers, so two different seeds ran as the same
+// one (review, session 32), and read "010" as octal.
 inline CLI::Validator uint64_text() {
   return CLI::Validator(
       [](std::string& s) {
+        if (std::string e = decimal_integer_error(s); !e.empty()) return e;
         std::uint64_t v = 0;
         const auto [end, error] = std::from_chars(s.data(), s.data() + s.size(), v);
-        if (!s.empty() && error == std::errc() && end == s.data() + s.size()) return std::string();
+        if (error == std::errc() && end == s.data() + s.size()) return std::string();
         return "expected an integer in [0, 18446744073709551615], got '" + s + "'";
       },
       "UINT64");
 }
 
-// Every option of `app` that takes a value refuses an empty value and an integer written with a
-// leading zero. CLI11 assigns a default-constructed value for an empty string ("--drone-id ''" ran
-// the app as drone 0, "--rounds ''" used every round, "--noise-floor ''" set 0): a script whose
-// variable was unset would run on a number nobody gave. And it reads integers in C's bases:
-// "--drone-id 010" ran as drone 8 and "--port 010" listened on port 8 (review, session 33). No
-// flag gives "" a meaning; a file literally named 010 is still reachable as ./010. Call after the
-// options are added, before parsing; flags (no value) and --help are left alone.
-inline void refuse_unclear_values(CLI::App& app) {
-  const CLI::Validator clear(
-      [](std::string& s) {
-        if (s.empty()) return std::string("expected a value, got an empty string");
-        const size_t digits = s.find_first_not_of("+-");
-        const bool leading_zero = digits != std::string::npos && s.size() > digits + 1 && s[digits] == '0' &&
-                                  s.find_first_not_of("0123456789", digits) == std::string::npos;
-        if (leading_zero) return "'" + s + "' has a leading zero, which would read as octal: write it without (./" + s +
-                                 " for a file)";
-        return std::string();
-      },
+// Every option of `app` that takes a value refuses an empty one. CLI11 assigns a
+// default-constructed value for an empty string ("--drone-id ''" ran the app as drone 0,
+// "--rounds ''" used every round, "--noise-floor ''" set 0): a script whose variable was unset
+// would run on a number nobody gave. No flag gives "" a meaning. Call after the options are added,
+// before parsing; flags (no value) and --help are left alone.
+inline void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator non_empty(
+      [](std::string& s) { return s.empty() ? std::string("expected a value, got an empty string") : std::string(); },
       "");
   for (CLI::Option* option : app.get_options())
-    if (option->get_type_size() != 0) option->check(clear);
+    if (option->get_type_size() != 0) option->check(non_empty);
 }
 
 }  // namespace fact::app

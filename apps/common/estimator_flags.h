@@ -2,6 +2,7 @@
 // options with the same names, units and checks. Header-only (needs CLI11).
 #pragma once
 
+#include "common/cli_checks.h"
 #include "fact/estimator.h"
 
 #include <CLI/CLI.hpp>
@@ -26,13 +27,14 @@ inline void add_estimator_flags(CLI::App& app, EstimatorFlags& f) {
   app.add_option("--mode", f.mode, "paper, complex, associated, or auto (the first that certifies)")
       ->type_name("MODE")
       ->capture_default_str();
-  app.add_option("--rounds", f.rounds, "Use only the first K rounds (0 = all)")->type_name("K")->capture_default_str();
+  app.add_option("--rounds", f.rounds, "Use only the first K rounds (0 = all)")->type_name("K")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.add_option("--window", f.window, "Of those rounds, use only the latest W (0 = all); bounds the VIO drift they span")
       ->type_name("W")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_option("--reference", f.reference, "Id of the reference drone (-1 = lowest id)")
       ->type_name("ID")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_option("--noise-floor", n.floor, "Detector centring error at any range, sigma in m")
       ->type_name("M")
       ->capture_default_str();

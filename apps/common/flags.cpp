@@ -9,7 +9,7 @@ namespace fact::app {
 
 void add_common_flags(CLI::App& cli, CommonFlags* f, DroneIdFlag drone_id) {
   auto* id = cli.add_option("--drone-id", f->drone_id, "This drone's id (>= 0); names the default channels")
-                 ->type_name("ID");
+                 ->type_name("ID")->check(fact::app::decimal_integer());
   if (drone_id == DroneIdFlag::required)
     id->required();
   else
@@ -68,7 +68,7 @@ bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeou
 
 int parse_flags(CLI::App& cli, int argc, char** argv, const char* app, const std::function<void()>& check) {
   try {
-    refuse_unclear_values(cli);
+    refuse_empty_values(cli);
     cli.parse(argc, argv);
     check();
     return -1;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "common/app.h"
+#include "common/cli_checks.h"  // (decimal_integer, for the apps' integer flags)
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>

@@ -84,7 +84,8 @@ void add_flags(CLI::App& app, Options& o) {
       ->type_name("NAME")
       ->capture_default_str();
   app.add_option("--model", o.model, "yolo: ONNX YOLOv8 model file")->type_name("FILE");
-  app.add_option("--yolo-size", o.yolo_size, "yolo: the model's square input size (px)")->capture_default_str();
+  app.add_option("--yolo-size", o.yolo_size, "yolo: the model's square input size (px)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.add_option("--odometry-wait-ms", o.odometry_wait_ms,
                  "How long a frame waits for odometry newer than it before it is processed with the newest (ms)")
       ->capture_default_str();
@@ -112,8 +113,9 @@ void add_flags(CLI::App& app, Options& o) {
                  "Segmentation: a drone is nearer than its surroundings by at least this (m)")
       ->capture_default_str();
   app.add_option("--confirm-hits", o.tracker.confirm_hits, "Tracker: matched frames to confirm a track")
-      ->capture_default_str();
-  app.add_option("--max-lost", o.tracker.max_lost, "Tracker: frames a lost track is kept")->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
+  app.add_option("--max-lost", o.tracker.max_lost, "Tracker: frames a lost track is kept")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.footer(
       "Publishes fact::detections_t per processed frame: the confirmed tracks matched in it, each with\n"
       "track_id, box (u, v, w, h px; edges enclose the pixels), confidence, range (m, centre to centre)\n"

@@ -297,12 +297,13 @@ int main(int argc, char** argv) {
   cli.add_option("--faults", f.faults, "Directions with faults: to-drone | to-swarm | both")
       ->capture_default_str()
       ->check(CLI::IsMember({"to-drone", "to-swarm", "both"}));
-  cli.add_option("--drone-id", f.drone_id, "Drone id, for the status message and logs");
+  cli.add_option("--drone-id", f.drone_id, "Drone id, for the status message and logs")
+      ->check(fact::app::decimal_integer());
   cli.add_option("--status-channel", f.status_channel, "Status channel (on the drone URL)")->capture_default_str();
   cli.add_option("--status-period", f.status_period, "s between status messages (0.001 … 3600)")->capture_default_str();
   cli.footer("Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -471,9 +471,11 @@ int main(int argc, char** argv) {
                  "--key-file)")
       ->type_name("NAME");
   cli.add_option("--roster", f.roster, "The swarm's drone ids (comma separated); others are refused. Default: any id "
-                                       "0 … --max-drone-id")->delimiter(',');
-  cli.add_option("--max-drone-id", f.max_drone_id, "Without a roster, ids above this are refused")->capture_default_str();
-  cli.add_option("--min-members", f.min_members, "Publish complete data only with at least this many drones")->capture_default_str();
+                                       "0 … --max-drone-id")->delimiter(',')->check(fact::app::decimal_integer());
+  cli.add_option("--max-drone-id", f.max_drone_id, "Without a roster, ids above this are refused")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  cli.add_option("--min-members", f.min_members, "Publish complete data only with at least this many drones")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   cli.add_flag("--rounds-from-channel", f.rounds_from_channel,
                "Take ready-made round packets (round_packet_t, numbered) on --round-channel instead of building them "
                "from detections and odometry (tests, the simulator)");
@@ -499,11 +501,13 @@ int main(int argc, char** argv) {
   cli.add_option("--settle", f.settle, "s after start before completing or numbering own rounds (hear the swarm first)")
       ->capture_default_str();
   cli.add_option("--max-rounds", f.max_rounds, "Rounds kept per drone (0 … max-rounds − 1; later ones refused)")
-      ->capture_default_str();
-  cli.add_option("--max-origins", f.max_origins, "Drone ids tracked")->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
+  cli.add_option("--max-origins", f.max_origins, "Drone ids tracked")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   cli.add_option("--future-window", f.future_window, "A round >= held + this is refused as far in the future")
-      ->capture_default_str();
-  cli.add_option("--max-observations", f.max_observations, "Observations per round packet")->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
+  cli.add_option("--max-observations", f.max_observations, "Observations per round packet")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   cli.add_option("--gossip-channel", f.gossip_channel, "Swarm channel (gossip_packet_t)")->capture_default_str();
   cli.add_option("--swarm-url", f.swarm_url,
                  "LCM URL of the swarm's bus for --gossip-channel; everything else stays on --lcm-url, the drone's own "
@@ -519,7 +523,7 @@ int main(int argc, char** argv) {
       "kind|sender|seq|payload. Make a key: head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \\n' > swarm.key\n"
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -147,7 +147,7 @@ int main(int argc, char** argv) {
   cli.add_option("original", original, "LCM log of the recorded run")->required()->type_name("ORIGINAL.lcm");
   cli.add_option("replay", replay, "LCM log of the replay")->required()->type_name("REPLAY.lcm");
   cli.add_option("--drones", drones, "Drone ids to compare (default: every drone with a result in the original)")
-      ->delimiter(',');
+      ->delimiter(',')->check(fact::app::decimal_integer());
   cli.add_option("--result-channel", result_channel, "Result channel base (+ _<id>)")->capture_default_str();
   cli.add_option("--rounds-channel", rounds_channel, "Complete-rounds channel base (+ _<id>), counted against fact-gossip's status")
       ->capture_default_str();
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
   cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
              "that lost messages (fewer results or rounds of a compared drone than its apps' status counters grew by in it).");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

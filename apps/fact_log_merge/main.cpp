@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   cli.add_option("inputs", inputs, "The logs to merge")->required()->type_name("LOG");
   cli.footer("Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags or an unreadable input.");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;
@@ -116,6 +116,15 @@ int main(int argc, char** argv) {
     std::cerr << kApp << ": error: cannot write " << output << ".partial-*: " << std::strerror(errno) << "\n";
     return 1;
   }
+  // mkstemp makes the file 0600: give it the old output's mode, or what a new file gets (0666 less
+  // the umask), as the fixed-name partial had (review, session 33: run.lcm became unreadable to
+  // others).
+  struct stat old_output {};
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  const mode_t mode = ::stat(output.c_str(), &old_output) == 0 ? (old_output.st_mode & 07777) : (0666 & ~mask);
+  if (::fchmod(partial_fd, mode) != 0)
+    std::cerr << kApp << ": warning: cannot set the mode of " << partial << ": " << std::strerror(errno) << "\n";
   ::close(partial_fd);
   const auto fail = [&](int code, const std::string& why) {
     std::cerr << kApp << ": error: " << why << "\n";

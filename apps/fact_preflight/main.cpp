@@ -273,7 +273,7 @@ int main(int argc, char** argv) {
   cli.add_option("--timeout", o.timeout, "s to wait for the flight controller, frames and odometry")->capture_default_str();
   cli.footer("Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
     fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::required);
     if (!(std::isfinite(o.timeout) && o.timeout > 0)) throw fact::app::FlagError("--timeout: expected a number > 0, got " + std::to_string(o.timeout));

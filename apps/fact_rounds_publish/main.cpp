@@ -62,21 +62,21 @@ void add_flags(CLI::App& app, Options& o) {
       ->type_name("URL");
   app.add_option("--drone-id", o.drone_id, "Drone id written in the message and in the default channel (>= 0)")
       ->type_name("ID")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_option("--channel", o.channel, "Channel to publish on (default FACT_SWARM_ROUNDS_<drone-id>)")
       ->type_name("CHANNEL");
   app.add_option("--count", o.count, "Number of publications (0 = until SIGINT/SIGTERM)")
       ->type_name("N")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_option("--interval", o.interval, "Seconds between publications (>= 0)")->type_name("S")->capture_default_str();
   app.add_option("--rounds", o.rounds, "Publish only the first K rounds of the file (0 = all)")
       ->type_name("K")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_flag("--incremental", o.incremental,
                "Publication k carries only the first min(k, K) rounds, as rounds complete one by one");
   app.add_option("--utime", o.utime, "utime of every message in microseconds (-1 = the wall clock when published)")
       ->type_name("US")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.footer(
       "Publishes fact::swarm_rounds_t (the message fact-gossip sends fact-solver) from a\n"
       "fact-rounds-v1 file: round k of the file becomes round number k. One log line per\n"
@@ -193,7 +193,7 @@ int main(int argc, char** argv) {
   add_flags(app, options);
   app.get_formatter()->column_width(30);
   try {
-    fact::app::refuse_unclear_values(app);
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
     check(options);
     return run(options);

@@ -633,7 +633,7 @@ int main(int argc, char** argv) {
              "an unreadable or damaged log, no truth, or a --json / --png that cannot be written.\n"
              "A log with no result at all is not certified (3); one whose results cannot be decoded is damaged (2).");
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -92,11 +92,10 @@ struct FlagError : std::runtime_error {
 void add_flags(CLI::App& app, Options& o) {
   app.add_option("--world", o.world_file, "fact-world-v1 JSON world file (default: the built-in default world)")
       ->type_name("FILE");
-  app.add_option("--drones", o.drones, "Number of drones (overrides the world's count; 1-64)")->type_name("N");
+  app.add_option("--drones", o.drones, "Number of drones (overrides the world's count; 1-64)")->type_name("N")
+      ->check(fact::app::decimal_integer());
   app.add_option("--seed", o.seed, "Seed of every random choice (starts, heights, drift, noise)")
-      ->check(CLI::Validator(
-          [](std::string& v) { return v.find('-') == std::string::npos ? std::string() : "expected a seed >= 0, got " + v; },
-          "SEED"))  // (CLI11 would wrap -1 to 2^64 - 1)
+      ->check(fact::app::uint64_text())  // (CLI11 would wrap -1 to 2^64 - 1 and read 010 as octal)
       ->capture_default_str();
   app.add_option("--rate", o.rate, "Real-time factor (1 = real time, 0 = as fast as possible)")->capture_default_str();
   app.add_option("--duration", o.duration, "Simulated seconds to run (0 = until SIGINT/SIGTERM)")
@@ -107,7 +106,8 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--resolution", o.resolution, "Camera resolution: 424x240 or 640x480")->capture_default_str();
   app.add_option("--script", o.script, "Scripted motion: none, hover or spin")->capture_default_str();
   app.add_option("--spin-rate", o.spin_rate, "Yaw rate of --script spin (rad/s, at most 1.5)")->capture_default_str();
-  app.add_option("--epoch-utime", o.epoch_utime, "Simulation time at start (us)")->capture_default_str();
+  app.add_option("--epoch-utime", o.epoch_utime, "Simulation time at start (us)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: LCM's default)")->type_name("URL");
   app.add_option("--frames-channel", o.frames_channel, "Frame channel base (+ _<id>)")->capture_default_str();
   app.add_option("--vio-channel", o.vio_channel, "Raw VIO odometry channel base (+ _<id>)")->capture_default_str();
@@ -119,7 +119,7 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--mavlink-port", o.mavlink_port,
                  "Simulated PX4 per drone over MAVLink v2 on UDP <mavlink-bind>:(BASE + drone id); 0 = off "
                  "(setpoints on LCM)")
-      ->type_name("BASE")->capture_default_str();
+      ->type_name("BASE")->capture_default_str()->check(fact::app::decimal_integer());
   app.add_option("--mavlink-bind", o.mavlink_bind, "IPv4 address the simulated flight controllers bind")
       ->type_name("ADDR")->capture_default_str();
   app.add_flag("--fc-auto-arm", o.fc_auto_arm, "Start the simulated flight controllers armed in OFFBOARD mode");
@@ -143,7 +143,7 @@ void add_flags(CLI::App& app, Options& o) {
                  "until its detector catches up")
       ->capture_default_str();
   app.add_option("--render-threads", o.render_threads, "Threads rendering the cameras (1-64; frames do not depend on it)")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_flag("--print-ids", o.print_ids, "Print the drones' ids (from the world and --drones), space separated, and exit");
   app.add_option("--detections-channel", o.detections_channel, "Detections channel base (+ _<id>), for --lockstep")
       ->capture_default_str();
@@ -755,7 +755,7 @@ int main(int argc, char** argv) {
   Options o;
   add_flags(cli, o);
   try {
-    fact::app::refuse_unclear_values(cli);
+    fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;

@@ -210,7 +210,7 @@ void SimFc::on_command(const mav::CommandLong& c, const sim::SimDrone& drone, in
       // off it disarm in mid-air (review, session 33).
       const double above_floor = drone.p.z();  // (the floor is z = 0; dynamics stops the centre there)
       const double above_start = drone.p.z() - drone.origin.z();
-      const bool on_start = (drone.p - drone.origin).head<2>().norm() <= 0.1 && above_start <= 0.02;
+      const bool on_start = (drone.p - drone.origin).head<2>().norm() <= 0.1 && std::abs(above_start) <= 0.02;
       const bool on_ground = drone.landed || ((above_floor <= 0.02 || on_start) && drone.v.norm() < 0.2);
       if (!on_ground) return deny("disarm refused in the air (" + num(above_floor) + " m above the floor)");
       if (armed_) event("disarmed");

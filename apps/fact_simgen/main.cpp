@@ -39,8 +39,8 @@ struct Command {
 
 void add_swarm_options(CLI::App& app, Command& c) {
   fact::SimOptions& s = c.sim;
-  app.add_option("--drones", s.drones, "number of drones N (>= 2)");
-  app.add_option("--rounds", s.rounds, "number of observation rounds K (>= 1)");
+  app.add_option("--drones", s.drones, "number of drones N (>= 2)")->check(fact::app::decimal_integer());
+  app.add_option("--rounds", s.rounds, "number of observation rounds K (>= 1)")->check(fact::app::decimal_integer());
   app.add_option("--ids", c.ids, "drone ids, comma separated, N unique non-negative integers (default 0..N-1)")
       ->type_name("ID,...");
   app.add_option("--formation", c.formation,
@@ -73,7 +73,8 @@ void add_sensor_options(CLI::App& app, Command& c) {
   app.add_option("--range-limit", s.range_limit, "farthest detectable drone (m); 0 = unlimited");
   app.add_option("--fov", s.fov_horizontal,
                  "horizontal field of view (rad): a detection sits uniformly within +-fov/2 of the heading");
-  app.add_option("--obstacles", s.obstacles, "number of random vertical cylinders, 3 m tall");
+  app.add_option("--obstacles", s.obstacles, "number of random vertical cylinders, 3 m tall")
+      ->check(fact::app::decimal_integer());
   app.add_option("--obstacle-radius", s.obstacle_radius, "radius of the random cylinders (m)");
   app.add_option("--given-obstacles", c.obstacles_file,
                  "JSON file: array of vertical cylinders {\"center\": [x, y, z], \"radius\": r, \"height\": h}, "
@@ -241,7 +242,7 @@ int main(int argc, char** argv) {
   add_sensor_options(app, command);
   add_file_options(app, command);
   try {
-    fact::app::refuse_unclear_values(app);
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help
     return app.exit(e);

@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
   add_flags(app, flags);
   app.get_formatter()->column_width(32);
   try {
-    fact::app::refuse_unclear_values(app);
+    fact::app::refuse_empty_values(app);
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help

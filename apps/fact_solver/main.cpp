@@ -64,7 +64,7 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--max-complete-rounds", o.max_complete_rounds,
                  "Reject a message claiming more complete rounds than this (>= 1)")
       ->type_name("K")
-      ->capture_default_str();
+      ->capture_default_str()->check(fact::app::decimal_integer());
   app.add_flag("--publish-solve-time", o.publish_solve_time,
                "Fill solve_us with the measured time (then drones' results differ in that field)");
   fact::app::add_estimator_flags(app, o.estimator);

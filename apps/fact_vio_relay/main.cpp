@@ -81,7 +81,8 @@ void add_flags(CLI::App& app, Options& o) {
   app.add_option("--rate", o.rate, "tum source: replay speed, x real time (0 = as fast as possible)")
       ->type_name("X")
       ->capture_default_str();
-  app.add_option("--port", o.port, "udp source: UDP port to listen on (1-65535)")->type_name("PORT");
+  app.add_option("--port", o.port, "udp source: UDP port to listen on (1-65535)")->type_name("PORT")
+      ->check(fact::app::decimal_integer());
   app.add_option("--bind", o.bind, "udp source: IPv4 address to listen on")->type_name("ADDR")->capture_default_str();
   app.add_flag("--restamp", o.restamp, "tum (at --rate 1) / udp sources: shift sample times so the first is the wall clock");
   app.add_option("--max-speed", o.filter.max_speed, "Reject a position change faster than this (m/s, > 0)")
@@ -105,7 +106,8 @@ void add_flags(CLI::App& app, Options& o) {
       "Rejected, counted and logged (at most one line per reason per second): NaN/inf fields\n"
       "(rejected_nan), time not strictly increasing (rejected_out_of_order), position or yaw jumps\n"
       "faster than --max-speed/--max-yaw-rate or more than 10 s after the last published sample\n"
-      "(rejected_jump), positions beyond 10 km (rejected_range), unusable quaternions\n"
+      "(rejected_jump), positions beyond 10 km, velocities beyond twice --max-speed, pitch outside\n"
+      "[-pi/2, pi/2] or roll outside [-pi, pi] (rejected_range), unusable quaternions\n"
       "(rejected_attitude), malformed lines (rejected_malformed), times beyond int64 us\n"
       "(rejected_time); lcm: undecodable messages, another drone's (wrong_drone_id). When 20\n"
       "samples in a row are out of order or jumps but each follows the one before within the\n"

@@ -58,18 +58,24 @@ void add_flags(CLI::App& app, Options& o) {
                  "only datagrams from REMOTE_HOST:REMOTE_PORT are read (others: foreign_datagrams)")
       ->type_name("LOCAL_PORT:REMOTE_HOST:REMOTE_PORT");
   app.add_option("--serial", o.serial, "MAVLink over a serial port (raw 8N1)")->type_name("DEVICE");
-  app.add_option("--baud", o.baud, "Serial rate in bit/s (" + fact::bridge::supported_bauds() + ")")->capture_default_str();
-  app.add_option("--sysid", o.sysid, "Our MAVLink system id (1..255)")->capture_default_str();
-  app.add_option("--compid", o.compid, "Our MAVLink component id (1..255; 191 = ONBOARD_COMPUTER)")->capture_default_str();
-  app.add_option("--target-system", o.target_system, "The flight controller's system id (1..255)")->capture_default_str();
-  app.add_option("--target-component", o.target_component, "The flight controller's component id (1..255)")->capture_default_str();
+  app.add_option("--baud", o.baud, "Serial rate in bit/s (" + fact::bridge::supported_bauds() + ")")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  app.add_option("--sysid", o.sysid, "Our MAVLink system id (1..255)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  app.add_option("--compid", o.compid, "Our MAVLink component id (1..255; 191 = ONBOARD_COMPUTER)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  app.add_option("--target-system", o.target_system, "The flight controller's system id (1..255)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  app.add_option("--target-component", o.target_component, "The flight controller's component id (1..255)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.add_option("--stream-rate", o.stream_rate, "Setpoint stream rate in Hz (PX4 needs > 2 Hz; at most 500)")->capture_default_str();
   app.add_option("--setpoint-timeout", o.setpoint_timeout, "s (0.01..60): an older setpoint stops the stream")->capture_default_str();
   app.add_option("--heartbeat-timeout", o.heartbeat_timeout, "s (0.01..60): an older FC heartbeat stops the stream")->capture_default_str();
   app.add_option("--geofence", o.geofence, "Setpoint box in f_i, m: XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX")->capture_default_str();
   app.add_flag("--arm", o.arm, "Request arming (COMMAND_LONG 400) once setpoints have streamed for 1 s");
   app.add_flag("--offboard", o.offboard, "Request PX4 OFFBOARD mode (COMMAND_LONG 176) once setpoints have streamed for 1 s");
-  app.add_option("--command-tries", o.command_tries, "Arm / offboard requests: rounds (1 s apart) before giving up")->capture_default_str();
+  app.add_option("--command-tries", o.command_tries, "Arm / offboard requests: rounds (1 s apart) before giving up")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   app.add_option("--state-rate", o.state_rate, "fc_state publication rate in Hz (0.01..100)")->capture_default_str();
   app.add_option("--setpoint-channel", o.setpoint_channel, "Input (default FACT_SETPOINT_<id>)")->type_name("CHANNEL");
   app.add_option("--odometry-channel", o.odometry_channel, "Input (default FACT_ODOMETRY_<id>)")->type_name("CHANNEL");
