@@ -30,6 +30,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <iomanip>
 #include <iostream>
@@ -38,6 +39,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace {
@@ -78,8 +80,13 @@ void add_flags(CLI::App& app, Options& o) {
   channel("--rounds-channel", o.rounds_channel, "Complete rounds from fact-gossip (default FACT_SWARM_ROUNDS_<id>)");
   channel("--result-channel", o.result_channel, "Result from fact-solver (default FACT_RESULT_<id>)");
   channel("--setpoint-channel", o.setpoint_channel, "Setpoints out (default FACT_SETPOINT_<id>)");
+  // A number flag; an integer one takes only a plain decimal integer (CLI11 read "010" as octal),
+  // the seed one within [0, 2^64 − 1] (CLI11 wrapped "-1" to 2^64 − 1).
   auto num = [&](const char* flag, auto& v, const char* what) {
-    app.add_option(flag, v, what)->capture_default_str();
+    CLI::Option* option = app.add_option(flag, v, what)->capture_default_str();
+    using T = std::decay_t<decltype(v)>;
+    if constexpr (std::is_same_v<T, std::uint64_t>) option->check(fact::app::uint64_text());
+    else if constexpr (std::is_integral_v<T>) option->check(fact::app::decimal_integer());
   };
   num("--seed", o.seed, "Seed of the planner's generator (takeoff height, random moves)");
   num("--setpoint-rate", o.setpoint_rate, "Setpoints per second (Hz, >= 20)");
