@@ -161,8 +161,7 @@ void add_flags(CLI::App& app, Options& o) {
       "Exit codes: 0 at --duration or SIGINT/SIGTERM; 1 LCM or socket failure; 2 bad flags or world file.");
 }
 
-// v in (0, most] (or 0 when zero_ok), naming the flag and the value.
-// v in [least, most], or 0 where zero_ok (0 = off / unlimited).
+// v in [least, most], or 0 where zero_ok (0 = off / unlimited), naming the flag and the value.
 void check_rate(const char* flag, double v, bool zero_ok, double least, double most) {
   if ((v >= least && v <= most) || (zero_ok && v == 0)) return;  // (false for NaN)
   std::ostringstream s;
