@@ -597,4 +597,24 @@ TEST(TruthJson, EncoderRejectsMismatchedSizes) {
   EXPECT_NE(m.find("target 7"), std::string::npos) << m;
 }
 
+// A camera's intrinsics.json (fact-detector's and fact-preflight's --png-dir): the six keys, each
+// error naming its key and value; other keys ignored; intrinsics_error's checks applied.
+TEST(IntrinsicsJson, ReadsTheSixKeysAndNamesWhatIsWrong) {
+  const fact::CameraIntrinsics k =
+      fact::intrinsics_from_json(R"({"width": 64, "height": 48, "fx": 213, "fy": 212.5, "cx": 32, "cy": 24, "note": 1})");
+  EXPECT_EQ(k.width, 64);
+  EXPECT_EQ(k.height, 48);
+  EXPECT_EQ(k.fy, 212.5);
+  EXPECT_EQ(error_of([&] { fact::intrinsics_from_json("not json"); }).rfind("invalid JSON", 0), 0u);
+  EXPECT_EQ(error_of([&] { fact::intrinsics_from_json(R"({"width": 64, "height": 48, "fy": 1, "cx": 1, "cy": 1})"); }),
+            "fx: required key is missing");
+  EXPECT_EQ(error_of([&] { fact::intrinsics_from_json(R"({"width": 0, "height": 48, "fx": 1, "fy": 1, "cx": 1, "cy": 1})"); }),
+            "width: 0 is not a whole number 1 … 8192");
+  EXPECT_EQ(error_of([&] { fact::intrinsics_from_json(R"({"width": 6.5, "height": 48, "fx": 1, "fy": 1, "cx": 1, "cy": 1})"); }),
+            "width: expected an integer, got 6.5");
+  EXPECT_NE(error_of([&] { fact::intrinsics_from_json(R"({"width": 64, "height": 48, "fx": -1, "fy": 1, "cx": 1, "cy": 1})"); })
+                .find("fx"),
+            std::string::npos);
+}
+
 }  // namespace

@@ -18,10 +18,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -137,6 +139,49 @@ TEST_F(Preflight, WhatTheAppsWouldRefuseFailsItsItemNamingIt) {
     EXPECT_NE(out.find(c.line), std::string::npos) << c.what << "\n" << out;
     EXPECT_NE(out.find("must not fly"), std::string::npos) << c.what;
   }
+}
+
+// The offline items, as the apps would read their inputs (review, session 33): a key file that is
+// a FIFO hung the check and /dev/zero grew it without end; a --png-dir whose intrinsics.json the
+// detector refuses, or whose pairs it ignores (not <utime>_gray.png), passed; a symbolic link loop
+// threw out of the check. Each now fails its item, naming why, within the timeout.
+TEST_F(Preflight, KeyFileAndPngDirAreCheckedAsTheAppsReadThem) {
+  namespace fs = std::filesystem;
+  const auto preflight = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args{FACT_PREFLIGHT_BINARY, "--drone-id", std::to_string(kDrone), "--lcm-url", "memq://",
+                                  "--timeout", "0.5"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    fact::test::AppProcess p(args, dir_ / "out", dir_ / "out");
+    EXPECT_TRUE(p.started());
+    const int code = p.wait_for(std::chrono::seconds(10));  // (-1: still running, the old hang)
+    return std::pair<int, std::string>{code, p.out()};
+  };
+  ASSERT_EQ(::mkfifo((dir_ / "key.fifo").c_str(), 0600), 0);
+  for (const std::string& key : {(dir_ / "key.fifo").string(), std::string("/dev/zero")}) {
+    const auto [code, out] = preflight(std::vector<std::string>{"--key-file", key});
+    EXPECT_EQ(code, 1) << key << "\n" << out;
+    EXPECT_NE(out.find("[FAIL] swarm key         " + key + " is not a regular file"), std::string::npos) << out;
+  }
+  const fs::path png = dir_ / "png";
+  fs::create_directories(png);
+  const auto write = [](const fs::path& p, const std::string& text) { std::ofstream(p) << text; };
+  write(png / "intrinsics.json", "not json");
+  write(png / "cam_gray.png", ""), write(png / "cam_depth.png", "");
+  auto [code, out] = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("[FAIL] camera"), std::string::npos) << out;
+  EXPECT_NE(out.find((png / "intrinsics.json").string() + ": "), std::string::npos) << out;
+  write(png / "intrinsics.json", R"({"width": 64, "height": 48, "fx": 213, "fy": 213, "cx": 32, "cy": 24})");
+  std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
+  EXPECT_NE(out.find("[FAIL] camera            0 gray/depth PNG pairs"), std::string::npos) << out;  // "cam" is no utime
+  write(png / "1700000000000000_gray.png", ""), write(png / "1700000000000000_depth.png", "");
+  std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
+  EXPECT_NE(out.find("[PASS] camera            1 gray/depth PNG pairs"), std::string::npos) << out;
+  fs::remove(png / "intrinsics.json");
+  fs::create_symlink(png / "intrinsics.json", png / "intrinsics.json");  // a loop
+  std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("[FAIL] camera"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "common/convert.h"
 #include "common/flags.h"
 #include "fact/detector.h"
+#include "fact/json_io.h"
 #include "fact/odometry_filter.h"
 #include "fact/odometry_t.hpp"
 #include "fact/tracker.h"
@@ -21,7 +22,6 @@
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -495,25 +495,11 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return "--png-dir " + dir + ": not a directory";
   const fs::path ipath = fs::path(dir) / "intrinsics.json";
-  std::ifstream in(ipath);
-  if (!in) return ipath.string() + ": cannot open";
   try {
-    nlohmann::json j = nlohmann::json::parse(in);
-    for (const char* key : {"width", "height", "fx", "fy", "cx", "cy"})
-      if (!j.contains(key) || !j[key].is_number()) return ipath.string() + ": \"" + key + "\" missing or not a number";
-    int size[2] = {0, 0};  // width, height: whole numbers 1 … 8192, checked before narrowing
-    for (int i = 0; i < 2; ++i) {
-      const char* key = i == 0 ? "width" : "height";
-      const bool whole = j[key].is_number_integer() && j[key].get<int64_t>() >= 1 && j[key].get<int64_t>() <= 8192;
-      if (!whole) return ipath.string() + ": \"" + key + "\" = " + j[key].dump() + " (must be a whole number 1 … 8192)";
-      size[i] = static_cast<int>(j[key].get<int64_t>());
-    }
-    *k = fact::CameraIntrinsics{size[0], size[1], j["fx"].get<double>(), j["fy"].get<double>(), j["cx"].get<double>(),
-                                j["cy"].get<double>()};
-  } catch (const std::exception& e) {
-    return ipath.string() + ": " + e.what();
+    *k = fact::read_intrinsics_file(ipath.string());
+  } catch (const fact::FormatError& e) {
+    return e.what();
   }
-  if (std::string e = fact::intrinsics_error(*k); !e.empty()) return ipath.string() + ": " + e;
   std::map<int64_t, PngPair> found;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();

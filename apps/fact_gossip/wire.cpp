@@ -52,9 +52,12 @@ std::string parse_key(const std::string& contents, SwarmKey* key) {
 std::string load_key(const std::string& path, SwarmKey* key) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return path + ": cannot open: " + std::strerror(errno);
-  std::string contents{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  // At most 4097 bytes: /dev/zero (or any endless stream) as a key file grew without end.
+  std::string contents(4097, '\0');
+  f.read(contents.data(), static_cast<std::streamsize>(contents.size()));
   if (f.bad()) return path + ": read failed";
-  if (contents.size() > 4096) return path + ": " + std::to_string(contents.size()) + " bytes, too large for a key file";
+  contents.resize(static_cast<std::size_t>(f.gcount()));
+  if (contents.size() > 4096) return path + ": more than 4096 bytes, too large for a key file";
   std::string e = parse_key(contents, key);
   return e.empty() ? "" : path + ": " + e;
 }

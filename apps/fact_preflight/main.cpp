@@ -23,6 +23,7 @@
 #include "common/flags.h"
 #include "fact/fc_state_t.hpp"
 #include "fact/frame_t.hpp"
+#include "fact/json_io.h"
 #include "fact/odometry_t.hpp"
 #include "fact_gossip/wire.h"
 
@@ -72,14 +73,16 @@ Item check_key(const Options& o) {
     it.seen = "no --key-file (and not --insecure)";
     return it;
   }
-  fact::app::SwarmKey key{};
-  if (const std::string e = fact::app::load_key(o.key_file, &key); !e.empty()) {
-    it.seen = e;
-    return it;
-  }
+  // A regular file, checked before it is opened: a FIFO hung the check, /dev/zero grew it without
+  // end (review, session 33).
   struct stat st {};
   if (stat(o.key_file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
     it.seen = o.key_file + " is not a regular file";
+    return it;
+  }
+  fact::app::SwarmKey key{};
+  if (const std::string e = fact::app::load_key(o.key_file, &key); !e.empty()) {
+    it.seen = e;
     return it;
   }
   if (st.st_mode & 077) {  // group or other may read or write it: the swarm's secret is not
@@ -98,24 +101,40 @@ Item check_key(const Options& o) {
   return it;
 }
 
+// As fact-detector reads the directory: intrinsics.json that it accepts (read_intrinsics_file),
+// and <utime>_gray.png + <utime>_depth.png pairs, utime a whole number of µs (files with other
+// names are ignored there, so they do not count here). A bad intrinsics.json or non-numeric names
+// used to pass, and a symbolic link loop threw out of the check (review, session 33).
 Item check_png_dir(const std::string& dir) {
   Item it{"camera", false, ""};
-  if (!fs::is_directory(dir)) {
-    it.seen = "--png-dir " + dir + " is not a directory";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    it.seen = "--png-dir " + dir + " is not a directory" + (ec ? " (" + ec.message() + ")" : "");
     return it;
   }
-  if (!fs::exists(fs::path(dir) / "intrinsics.json")) {
-    it.seen = dir + "/intrinsics.json is missing";
+  try {
+    (void)fact::read_intrinsics_file((fs::path(dir) / "intrinsics.json").string());
+  } catch (const fact::FormatError& e) {
+    it.seen = e.what();
     return it;
   }
   int pairs = 0;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string n = e.path().filename().string();
+  for (fs::directory_iterator entry(dir, ec), end; !ec && entry != end; entry.increment(ec)) {
+    const std::string n = entry->path().filename().string();
     const auto at = n.rfind("_gray.png");
-    if (at != std::string::npos && at + 9 == n.size() && fs::exists(fs::path(dir) / (n.substr(0, at) + "_depth.png"))) ++pairs;
+    if (at == std::string::npos || at + 9 != n.size() || at == 0) continue;
+    const std::string stem = n.substr(0, at);
+    std::error_code depth_ec;
+    if (stem.find_first_not_of("0123456789") == std::string::npos &&
+        fs::is_regular_file(fs::path(dir) / (stem + "_depth.png"), depth_ec))
+      ++pairs;
+  }
+  if (ec) {
+    it.seen = "--png-dir " + dir + ": " + ec.message();
+    return it;
   }
   it.pass = pairs > 0;
-  it.seen = std::to_string(pairs) + " gray/depth PNG pairs in " + dir;
+  it.seen = std::to_string(pairs) + " gray/depth PNG pairs (<utime>_gray.png, <utime>_depth.png) in " + dir;
   return it;
 }
 

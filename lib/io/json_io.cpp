@@ -6,6 +6,7 @@
 // ordered list of stages) and prints doubles with the shortest text that parses back to the
 // same bits.
 #include "fact/json_io.h"
+#include "fact/file_read.h"
 
 #include "io/json_read.h"
 
@@ -584,6 +585,31 @@ std::vector<Eigen::Vector3d> positions_from_json(const std::string& text) {
   std::vector<Eigen::Vector3d> out;
   for (std::size_t i = 0; i < doc.size(); ++i) out.push_back(vec3(doc[i], element("", i)));
   return out;
+}
+
+CameraIntrinsics intrinsics_from_json(const std::string& text) {
+  const Json doc = parse_text(text);
+  expect_object(doc, "");
+  CameraIntrinsics k;
+  for (auto [key, size] : {std::pair{"width", &k.width}, {"height", &k.height}}) {
+    const Json& value = need(doc, "", key);
+    *size = integer(value, member("", key));
+    if (*size < 1 || *size > 8192) fail(member("", key), describe(value) + " is not a whole number 1 … 8192");
+  }
+  for (auto [key, focal] : {std::pair{"fx", &k.fx}, {"fy", &k.fy}, {"cx", &k.cx}, {"cy", &k.cy}})
+    *focal = number(need(doc, "", key), member("", key));
+  if (const std::string e = intrinsics_error(k); !e.empty()) fail("", e);
+  return k;
+}
+
+CameraIntrinsics read_intrinsics_file(const std::string& path) {
+  std::string text;
+  if (std::string e = read_regular_file(path, std::size_t{1} << 20, &text); !e.empty()) throw FormatError(e);
+  try {
+    return intrinsics_from_json(text);
+  } catch (const FormatError& e) {
+    throw FormatError(path + ": " + e.what());
+  }
 }
 
 std::vector<Obstacle> obstacles_from_json(const std::string& text) {

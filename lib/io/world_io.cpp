@@ -1,6 +1,7 @@
 // fact-world-v1 (see fact/world_io.h). Reads through checked accessors that carry the JSON path of
 // the value they read, so every error names the path and the value (as lib/io/json_io.cpp does).
 #include "fact/world_io.h"
+#include "fact/file_read.h"
 
 #include "io/json_read.h"
 
@@ -202,12 +203,11 @@ sim::World world_from_json(const std::string& text_in) {
 }
 
 sim::World read_world_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FormatError(path + ": cannot open the world file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
+  std::string text;  // (a world file is a few kB; 16 MiB is far beyond any)
+  if (std::string e = read_regular_file(path, std::size_t{16} << 20, &text); !e.empty())
+    throw FormatError(e + " (the world file)");
   try {
-    return world_from_json(ss.str());
+    return world_from_json(text);
   } catch (const FormatError& e) {
     throw FormatError(path + ": " + e.what());
   }

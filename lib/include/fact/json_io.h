@@ -57,6 +57,7 @@
 //   are vertical cylinders standing on z = 0 (world, metres).
 #pragma once
 
+#include "fact/camera.h"
 #include "fact/estimator.h"
 #include "fact/rounds.h"
 #include "fact/simgen.h"
@@ -84,5 +85,12 @@ std::string truth_to_json(const Truth& truth);
 // ({"center": [x, y, z], "radius": r, "height": h}, m).
 std::vector<Eigen::Vector3d> positions_from_json(const std::string& text);
 std::vector<Obstacle> obstacles_from_json(const std::string& text);
+
+// A camera's intrinsics.json (fact-detector's and fact-preflight's --png-dir): an object with
+// "width" and "height" (whole numbers 1 … 8192, px) and "fx", "fy", "cx", "cy" (px), usable by
+// intrinsics_error's checks; other keys are ignored. Throws FormatError naming the key and value.
+CameraIntrinsics intrinsics_from_json(const std::string& text);
+// The same from the file at `path` (a regular file of at most 1 MiB); FormatErrors name the path.
+CameraIntrinsics read_intrinsics_file(const std::string& path);
 
 }  // namespace fact
