@@ -121,8 +121,8 @@ inline fact::swarm_result_t swarm_result(int64_t utime, int id) {
   m.utime = utime;
   m.drone_id = id;
   m.mode = "associated";
-  m.status = "certified";
-  m.reason = "certified unique; 3 drones resolved";
+  m.status = "ambiguous";  // (drone 4 is unresolved: a certified result resolves every drone)
+  m.reason = "drone 4 unresolved";
   m.reference = 1;
   m.rounds_used = 2;
   for (int d : {1, 2, 4}) {

@@ -707,4 +707,27 @@ TEST(Convert, InvalidInputResultAndResultErrors) {
   r = samples::swarm_result(1, 1);
   r.drones[1].id = 1;
   EXPECT_TRUE(contains(app::result_from_message(r, &out), "drones[1].id is 1, listed twice"));
+  r = samples::swarm_result(1, 1);
+  r.solve_us = -std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(contains(app::result_from_message(r, &out), "solve_us is -inf"));
+  // A "certified" result that certifies nothing (review, session 33: it passed, and the planner
+  // holds on a certified result).
+  fact::swarm_result_t c = samples::swarm_result(1, 1);
+  c.status = "certified";
+  c.drones[2].resolved = true;
+  c.drones[2].yaw = 0.5;
+  ASSERT_EQ(app::result_from_message(c, &out), "");
+  r = c;
+  r.mode = "auto";
+  EXPECT_TRUE(contains(app::result_from_message(r, &out), "status is certified but mode is \"auto\""));
+  r = c;
+  r.drones[1].resolved = false;
+  EXPECT_TRUE(contains(app::result_from_message(r, &out), "status is certified but drone"));
+  r = c;
+  r.reference = -7;
+  EXPECT_TRUE(contains(app::result_from_message(r, &out), "the reference -7 is not among its drones"));
+  r = c;
+  r.num_drones = 0;
+  r.drones.clear();
+  EXPECT_TRUE(contains(app::result_from_message(r, &out), "status is certified but drones is empty"));
 }

@@ -19,10 +19,23 @@ namespace fact::app {
 namespace {
 std::atomic<bool> g_sim_clock{false};
 std::atomic<int64_t> g_sim_now{0};
+std::atomic<int64_t> g_ticks_undecodable{0}, g_ticks_refused{0};
+
+// The latest simulated time a tick may carry (µs since the epoch, about the year 2128): fact-sim's
+// own epoch is at most 4e15 and its duration 1e7 s. A tick beyond it, or not positive, would hold
+// the clock there for good (a tick at INT64_MAX − 5 did: review, session 33).
+constexpr int64_t kLatestSimTime = 5000000000000000;
 
 void on_sim_clock(const lcm::ReceiveBuffer* rbuf, const std::string&, void*) {
   fact::sim_clock_t tick;
-  if (!rbuf || !decode_error(rbuf->data, static_cast<int>(rbuf->data_size), &tick).empty()) return;
+  if (!rbuf || !decode_error(rbuf->data, static_cast<int>(rbuf->data_size), &tick).empty()) {
+    ++g_ticks_undecodable;
+    return;
+  }
+  if (tick.utime <= 0 || tick.utime > kLatestSimTime) {
+    ++g_ticks_refused;
+    return;
+  }
   int64_t seen = g_sim_now.load();
   while (tick.utime > seen && !g_sim_now.compare_exchange_weak(seen, tick.utime)) {
   }
@@ -47,6 +60,8 @@ void follow_sim_clock(lcm::LCM& lcm, const std::string& channel) {
 }
 
 bool following_sim_clock() { return g_sim_clock.load(); }
+
+SimClockTicks sim_clock_ticks_dropped() { return {g_ticks_undecodable.load(), g_ticks_refused.load()}; }
 
 bool wait_for_sim_clock(lcm::LCM& lcm, int timeout_ms) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);

@@ -38,9 +38,14 @@ int64_t monotonic_us();
 
 // Switches now_us() to the simulation clock: fact::sim_clock_t ticks on `channel` (from fact-sim).
 // now_us() then returns the newest simulated time received (it never goes back; 0 before the
-// first tick). Undecodable ticks are ignored. Call once, before the app's loop.
+// first tick). Undecodable ticks, and ticks at a time not in (0, 5e15] µs (a clock held there for
+// good), are counted and ignored. Call once, before the app's loop.
 void follow_sim_clock(lcm::LCM& lcm, const std::string& channel);
 bool following_sim_clock();
+struct SimClockTicks {
+  int64_t undecodable = 0, refused = 0;
+};
+SimClockTicks sim_clock_ticks_dropped();  // since the start
 // Handles LCM messages until the first simulation tick arrives: true, or false after timeout_ms
 // (or a stop request) without one.
 bool wait_for_sim_clock(lcm::LCM& lcm, int timeout_ms);

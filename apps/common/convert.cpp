@@ -233,6 +233,19 @@ std::string result_from_message(const fact::swarm_result_t& m, Estimate* out) {
     if (!d.resolved) e.unresolved.push_back(d.id);
     e.drones.push_back(d);
   }
+  // A certified result certifies something: a mode that ran (not auto), every drone resolved, the
+  // reference among them. A "certified" message with no drones, reference −7 and auto passed, and
+  // the planner holds on any certified result (review, session 33).
+  if (e.status == EstimateStatus::certified) {
+    if (m.mode == "auto") return at + "status is certified but mode is \"auto\" (the mode that certified it)";
+    if (m.drones.empty()) return at + "status is certified but drones is empty";
+    if (!e.unresolved.empty())
+      return at + "status is certified but drone " + std::to_string(e.unresolved.front()) + " is not resolved";
+    if (!ids.count(m.reference))
+      return at + "status is certified but the reference " + std::to_string(m.reference) + " is not among its drones";
+  }
+  if (!(m.solve_us >= 0) || !std::isfinite(m.solve_us))
+    return at + "solve_us is " + std::to_string(m.solve_us) + " (must be a finite time >= 0)";
   e.certificate.objective = m.objective;
   e.certificate.dual_objective = m.dual_objective;
   e.certificate.gap = m.gap;

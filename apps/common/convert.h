@@ -40,9 +40,10 @@ fact::swarm_rounds_t rounds_to_message(const Rounds& rounds, int drone_id, int64
 
 // The inverse of result_to_message, for consumers (planner, evaluation): checks num_drones equals the
 // array size, mode (paper, complex, associated; auto on an invalid_input result) and status are
-// known names, ids are unique and ≥ 0, a resolved drone's pose is
-// finite. Unresolved poses and the certificate may be NaN (they do not exist). timing_us gets
-// {"total", solve_us}. On error *out is left unchanged.
+// known names, ids are unique and ≥ 0, a resolved drone's pose is finite, solve_us is finite and
+// ≥ 0, and a certified result names the mode that certified it, has drones, every one resolved,
+// and its reference among them. Unresolved poses and the certificate may be NaN (they do not
+// exist). timing_us gets {"total", solve_us}. On error *out is left unchanged.
 std::string result_from_message(const fact::swarm_result_t& m, Estimate* out);
 
 // An estimate as a swarm result (mode, status, reason, reference, rounds used, poses, certificate;

@@ -62,7 +62,13 @@ bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeou
     log.event("simulation clock at " + std::to_string(now_us()) + " us");
     return true;
   }
-  log.event("error: no simulation clock tick on " + f.clock_channel + " within " + std::to_string(timeout_ms) + " ms");
+  // (ticks that arrived but could not be used are named: a foreign type on the channel, a bad time)
+  const SimClockTicks dropped = sim_clock_ticks_dropped();
+  std::string seen;
+  if (dropped.undecodable > 0) seen += ", " + std::to_string(dropped.undecodable) + " undecodable message(s) there";
+  if (dropped.refused > 0) seen += ", " + std::to_string(dropped.refused) + " tick(s) at a time not in (0, 5e15] us";
+  log.event("error: no simulation clock tick on " + f.clock_channel + " within " + std::to_string(timeout_ms) + " ms" +
+            seen);
   return false;
 }
 

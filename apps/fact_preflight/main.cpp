@@ -252,7 +252,8 @@ class Listener {
   // frame (fact-gossip interpolates the odometry at each detection's time).
   void check_clocks() {
     if (!o_.png_dir.empty() || newest_frame_utime_ == INT64_MIN || odometry_ == 0 || bad_odometry_) return;
-    const double apart_s = static_cast<double>(last_utime_ - newest_frame_utime_) * 1e-6;
+    // (in double: the int64 difference of two far-apart stamps overflowed and came out small)
+    const double apart_s = (static_cast<double>(last_utime_) - static_cast<double>(newest_frame_utime_)) * 1e-6;
     if (std::abs(apart_s) <= 1.0) return;
     vio_->pass = false;
     vio_->seen = "odometry utime " + std::to_string(last_utime_) + " us is " + fmt(apart_s) + " s from the newest frame's " +
@@ -295,7 +296,7 @@ int main(int argc, char** argv) {
     fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
     fact::app::check_common_flags(o.common, fact::app::DroneIdFlag::required);
-    if (!(std::isfinite(o.timeout) && o.timeout > 0)) throw fact::app::FlagError("--timeout: expected a number > 0, got " + std::to_string(o.timeout));
+    fact::app::check_range("--timeout", o.timeout, 0.1, 3600, "s");  // (1e-300 waited for nothing)
     if (o.insecure && !o.key_file.empty()) throw fact::app::FlagError("--insecure and --key-file exclude each other");
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;
