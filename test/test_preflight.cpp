@@ -130,7 +130,6 @@ TEST_F(Preflight, WhatTheAppsWouldRefuseFailsItsItemNamingIt) {
       {"frozen VIO", [](Hardware& h) { h.frozen = true; }, "not increasing (a frozen or repeating VIO)"},
       {"VIO on the boot clock", [](Hardware& h) { h.odometry_offset_us = -1699990000000000; },
        "the VIO and the camera are on different clocks"},
-
   };
   for (const Case& c : cases) {
     Hardware hw;
