@@ -291,7 +291,10 @@ int main(int argc, char** argv) {
   cli.add_option("--odometry-channel", o.odometry_channel, "Default FACT_ODOMETRY_<id>")->type_name("CHANNEL");
   cli.add_option("--fc-state-channel", o.fc_state_channel, "Default FACT_FC_STATE_<id>")->type_name("CHANNEL");
   cli.add_option("--timeout", o.timeout, "s to wait for the flight controller, frames and odometry")->capture_default_str();
-  cli.footer("Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.");
+  cli.footer("--sim-clock, --clock-channel, --status-channel and --status-period are accepted, as every app takes\n"
+             "them (scripts/run-drone.sh gives each app the same ones), and have no effect here: the checklist\n"
+             "waits on the steady clock, compares the messages' own stamps, and is printed, not published.\n"
+             "Exit codes: 0 every item passes; 1 an item fails; 2 bad flags.");
   try {
     fact::app::refuse_empty_values(cli);
     cli.parse(argc, argv);
