@@ -25,7 +25,7 @@
 # --lcm-url). Best: --lcm-url with ttl=0 (stays on the drone's computer) and --swarm-url with
 # ttl=1 on the swarm's network, so only the gossip crosses between drones; --out DIR (logs; default build/run-drone-<id>),
 # --arm (let fact-fc-bridge arm and switch to OFFBOARD; default: the pilot does), --sim-clock
-# (apps follow fact-sim's clock: simulated hardware), --preflight-timeout S (default 10),
+# (apps follow fact-sim's clock: simulated hardware), --preflight-timeout S (0.1 … 3600, default 10),
 # --check-only (run the checklist and stop), --no-build, --noise-quadratic Q (the solver's range
 # σ per m² of range, 1/m: measure it for this camera; default: fact-solver's 0.008).
 #
@@ -89,8 +89,9 @@ if [ -n "$roster" ]; then
 else
   [ "$id" -le 9999 ] || die "--id $id: above 9999 (fact-gossip's --max-drone-id) needs a --roster that lists it"
 fi
-[[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] && is_positive "$preflight_timeout" ||
-  die "--preflight-timeout: expected seconds > 0, got '$preflight_timeout'"
+[[ "$preflight_timeout" =~ ^[0-9]+([.][0-9]+)?$ ]] &&
+  awk -v v="$preflight_timeout" 'BEGIN { exit !(v >= 0.1 && v <= 3600) }' ||
+  die "--preflight-timeout: expected seconds in [0.1, 3600] (fact-preflight's --timeout), got '$preflight_timeout'"
 [ -z "$noise_quadratic" ] || is_positive "$noise_quadratic" ||
   die "--noise-quadratic: expected a number > 0, got '$noise_quadratic'"
 

@@ -177,6 +177,10 @@ TEST_F(Preflight, KeyFileAndPngDirAreCheckedAsTheAppsReadThem) {
   write(png / "1700000000000000_gray.png", ""), write(png / "1700000000000000_depth.png", "");
   std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
   EXPECT_NE(out.find("[PASS] camera            1 gray/depth PNG pairs"), std::string::npos) << out;
+  write(png / "99999999999999999999_gray.png", ""), write(png / "99999999999999999999_depth.png", "");
+  std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});
+  EXPECT_NE(out.find("the time 99999999999999999999 us does not fit in 64 bits"), std::string::npos) << out;
+  fs::remove(png / "99999999999999999999_gray.png"), fs::remove(png / "99999999999999999999_depth.png");
   fs::remove(png / "intrinsics.json");
   fs::create_symlink(png / "intrinsics.json", png / "intrinsics.json");  // a loop
   std::tie(code, out) = preflight(std::vector<std::string>{"--insecure", "--png-dir", png.string()});

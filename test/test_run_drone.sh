@@ -80,7 +80,11 @@ grep -q "at least 2 drones" "$WORK/out" || fail "a one-drone roster was not refu
 check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --roster 0,1,1
 grep -q "lists id 1 twice" "$WORK/out" || fail "a roster listing an id twice was not refused"
 check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 0
-grep -q "\-\-preflight-timeout: expected seconds > 0" "$WORK/out" || fail "--preflight-timeout 0 was not refused"
+grep -q "\-\-preflight-timeout: expected seconds in \[0.1, 3600\]" "$WORK/out" || fail "--preflight-timeout 0 was not refused"
+# (beyond fact-preflight's own range: refused here, before any app is started)
+check 2 --fc udp:14546:127.0.0.1:14600 --key "$WORK/swarm.key" --preflight-timeout 5000
+grep -q "\-\-preflight-timeout: expected seconds in \[0.1, 3600\] .*got '5000'" "$WORK/out" ||
+  fail "--preflight-timeout 5000 was not refused"
 check 2 --fc udp:abc:127.0.0.1:14600 --key "$WORK/swarm.key"
 grep -q "\-\-fc udp:LOCAL:HOST:PORT: expected ports" "$WORK/out" || fail "a bad --fc port was not refused"
 # SIGTERM while the checklist waits: 143 (not 0, which says it passed), and nothing left running.

@@ -33,6 +33,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <cmath>
@@ -124,10 +125,15 @@ Item check_png_dir(const std::string& dir) {
     const auto at = n.rfind("_gray.png");
     if (at == std::string::npos || at + 9 != n.size() || at == 0) continue;
     const std::string stem = n.substr(0, at);
+    if (stem.find_first_not_of("0123456789") != std::string::npos) continue;
+    int64_t utime = 0;  // (the detector refuses the directory when a time does not fit in 64 bits)
+    const auto [end_of_time, parse] = std::from_chars(stem.data(), stem.data() + stem.size(), utime);
+    if (parse != std::errc() || end_of_time != stem.data() + stem.size()) {
+      it.seen = (fs::path(dir) / n).string() + ": the time " + stem + " us does not fit in 64 bits";
+      return it;
+    }
     std::error_code depth_ec;
-    if (stem.find_first_not_of("0123456789") == std::string::npos &&
-        fs::is_regular_file(fs::path(dir) / (stem + "_depth.png"), depth_ec))
-      ++pairs;
+    if (fs::is_regular_file(fs::path(dir) / (stem + "_depth.png"), depth_ec)) ++pairs;
   }
   if (ec) {
     it.seen = "--png-dir " + dir + ": " + ec.message();

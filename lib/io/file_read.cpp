@@ -9,29 +9,36 @@
 
 namespace fact {
 
-std::string read_regular_file(const std::string& path, std::size_t max_bytes, std::string* text) {
+std::string read_small_file(const std::string& path, std::size_t max_bytes, std::string* text) {
+  // Opened without blocking (a FIFO's open waits for a writer otherwise), then read blocking.
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return path + ": cannot open: " + std::strerror(errno);
   struct stat st {};
   std::string why;
   if (::fstat(fd, &st) != 0) {
     why = path + ": cannot stat: " + std::strerror(errno);
-  } else if (!S_ISREG(st.st_mode)) {
-    why = path + ": not a regular file";
-  } else if (static_cast<std::size_t>(st.st_size) > max_bytes) {
-    why = path + ": " + std::to_string(st.st_size) + " bytes, more than the " + std::to_string(max_bytes) + " expected";
+  } else if (!S_ISREG(st.st_mode) && !S_ISFIFO(st.st_mode) && !S_ISSOCK(st.st_mode)) {
+    why = path + (S_ISDIR(st.st_mode) ? ": a directory" : ": a device, not a file");
+  } else if (::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0) {
+    why = path + ": cannot read: " + std::strerror(errno);
   } else {
-    text->assign(static_cast<std::size_t>(st.st_size), '\0');
-    std::size_t got = 0;
-    while (got < text->size()) {
-      const ssize_t n = ::read(fd, text->data() + got, text->size() - got);
+    std::string out;
+    char buf[65536];
+    for (;;) {
+      const ssize_t n = ::read(fd, buf, sizeof buf);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        why = path + ": read failed" + (n < 0 ? std::string(": ") + std::strerror(errno) : std::string(" (shorter than its size)"));
+      if (n < 0) {
+        why = path + ": read failed: " + std::strerror(errno);
         break;
       }
-      got += static_cast<std::size_t>(n);
+      if (n == 0) break;
+      out.append(buf, static_cast<std::size_t>(n));
+      if (out.size() > max_bytes) {
+        why = path + ": more than the " + std::to_string(max_bytes) + " bytes expected";
+        break;
+      }
     }
+    if (why.empty()) *text = std::move(out);
   }
   ::close(fd);
   return why;

@@ -598,13 +598,13 @@ CameraIntrinsics intrinsics_from_json(const std::string& text) {
   }
   for (auto [key, focal] : {std::pair{"fx", &k.fx}, {"fy", &k.fy}, {"cx", &k.cx}, {"cy", &k.cy}})
     *focal = number(need(doc, "", key), member("", key));
-  if (const std::string e = intrinsics_error(k); !e.empty()) fail("", e);
+  if (const std::string e = intrinsics_error(k); !e.empty()) throw FormatError(e);  // (it names the field)
   return k;
 }
 
 CameraIntrinsics read_intrinsics_file(const std::string& path) {
   std::string text;
-  if (std::string e = read_regular_file(path, std::size_t{1} << 20, &text); !e.empty()) throw FormatError(e);
+  if (std::string e = read_small_file(path, std::size_t{1} << 20, &text); !e.empty()) throw FormatError(e);
   try {
     return intrinsics_from_json(text);
   } catch (const FormatError& e) {

@@ -204,7 +204,7 @@ sim::World world_from_json(const std::string& text_in) {
 
 sim::World read_world_file(const std::string& path) {
   std::string text;  // (a world file is a few kB; 16 MiB is far beyond any)
-  if (std::string e = read_regular_file(path, std::size_t{16} << 20, &text); !e.empty())
+  if (std::string e = read_small_file(path, std::size_t{16} << 20, &text); !e.empty())
     throw FormatError(e + " (the world file)");
   try {
     return world_from_json(text);

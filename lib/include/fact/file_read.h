@@ -6,10 +6,11 @@
 
 namespace fact {
 
-// Reads the regular file at `path` (symbolic links followed) into *text, at most max_bytes.
-// Returns "" or the reason, naming the path: it cannot be opened, it is not a regular file (a FIFO
-// with no writer hung the reader, /dev/zero grew it without end), or it is larger than max_bytes.
-// The file is opened without blocking, so a FIFO is refused rather than waited on.
-std::string read_regular_file(const std::string& path, std::size_t max_bytes, std::string* text);
+// Reads the file at `path` (symbolic links followed) into *text, at most max_bytes, to its end: a
+// regular file (its size is not trusted: /proc files report 0), or a pipe or FIFO (a shell's
+// <(...)); a FIFO that no process writes to reads as empty rather than blocking. Returns "" or the
+// reason, naming the path: it cannot be opened, it is a device or a directory (/dev/zero grew the
+// reader without end), or it holds more than max_bytes.
+std::string read_small_file(const std::string& path, std::size_t max_bytes, std::string* text);
 
 }  // namespace fact
