@@ -16,7 +16,7 @@ namespace fact::app {
 // " 010" too, and "0x10" 16 (review, session 33).
 inline std::string decimal_integer_error(const std::string& s) {
   if (s.empty()) return "expected a value, got an empty string";  // (as refuse_empty_values says it)
-  const size_t digits = s.empty() || (s[0] != '+' && s[0] != '-') ? 0 : 1;
+  const size_t digits = s[0] == '+' || s[0] == '-' ? 1 : 0;
   if (digits == s.size() || s.find_first_not_of("0123456789", digits) != std::string::npos)
     return "expected a decimal integer, got '" + s + "'";
   if (s[digits] == '0' && s.size() > digits + 1)

@@ -45,13 +45,11 @@ void check_range(const char* flag, double value, double lo, double hi, const cha
 }
 
 void check_common_flags(const CommonFlags& f, DroneIdFlag drone_id) {
-  (void)drone_id;
+  (void)drone_id;  // (an empty --status-channel or --clock-channel is refused while parsing: refuse_empty_values)
   if (f.drone_id < 0)
     throw FlagError("--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id));
-  if (f.status_channel.empty()) throw FlagError("--status-channel: expected a channel name, got \"\"");
   // 1 ms … 1 h: the period in µs neither rounds to 0 nor overflows (1e13 s gave a 1 µs period).
   check_range("--status-period", f.status_period, 0.001, 3600, "s");
-  if (f.sim_clock && f.clock_channel.empty()) throw FlagError("--clock-channel: expected a channel name, got \"\"");
 }
 
 bool start_clock(lcm::LCM& lcm, const CommonFlags& f, const Log& log, int timeout_ms) {

@@ -112,11 +112,11 @@ bool LogReader::next(lcm::LogEvent* event) {
     // mid-write; beyond it, or with another event's sync word in the bytes left, the length is
     // damaged (one flipped bit in a length in mid-log was taken for a torn end, and the rest of
     // the log dropped with a warning; review, session 33).
-    const int64_t next = data_len <= kLargestMessage ? next_event_header(file_, offset_ + kHeaderBytes) : -1;
-    if (data_len <= kLargestMessage && next < 0)
-      return tear(std::to_string(left) + " of its " + std::to_string(channel_len + static_cast<int64_t>(data_len)) +
-                  " channel and data bytes");
-    if (next >= 0) {
+    if (data_len <= kLargestMessage) {
+      const int64_t next = next_event_header(file_, offset_ + kHeaderBytes);
+      if (next < 0)
+        return tear(std::to_string(left) + " of its " + std::to_string(channel_len + static_cast<int64_t>(data_len)) +
+                    " channel and data bytes");
       error_ = at + ": data length " + std::to_string(data_len) + " runs past the end of the file, but another event " +
                "starts at byte " + std::to_string(next) + " (a damaged length, not a torn last event)";
       return false;

@@ -22,9 +22,8 @@
 // --channel values are LCM channel regexes (GLib's, as LCM compiles them, matching whole names).
 // The relay subscribes once per side to every channel and forwards a message when any pattern,
 // compiled on its own, matches its channel: a channel that two patterns match is forwarded once
-// (two
-// subscriptions forwarded it twice, and each copy's echo was absorbed once: the copies bounced
-// between the buses for ever; review, session 32). Hold-backs and echo memory run on the
+// (two subscriptions forwarded it twice, and each copy's echo was absorbed once: the copies
+// bounced between the buses for ever; review, session 32). Hold-backs and echo memory run on the
 // monotonic clock (a wall-clock step must not hold messages for the step).
 //
 // Publishes its counters (fact::app_status_t) on the drone URL's --status-channel.
@@ -269,9 +268,6 @@ std::string flags_error(const Flags& f) {
   if (!(f.status_period >= 0.001 && f.status_period <= 3600))  // (as every app: the µs neither 0 nor overflowing)
     return "--status-period: expected a number in [0.001, 3600] s, got " + std::to_string(f.status_period);
   if (f.drone_id < -1) return "--drone-id: expected an id >= 0, got " + std::to_string(f.drone_id);
-  if (f.status_channel.empty()) return "--status-channel: empty";
-  for (const std::string& c : f.channels)
-    if (c.empty()) return "--channel: an empty pattern";  // (each is compiled by Relay::subscribe)
   return "";
 }
 

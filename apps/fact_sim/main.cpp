@@ -209,9 +209,7 @@ void check(const Options& o) {
   } else if (o.fc_auto_arm) {
     throw FlagError("--fc-auto-arm needs --mavlink-port");
   }
-  for (const std::string* c : {&o.frames_channel, &o.vio_channel, &o.setpoint_channel, &o.truth_channel,
-                               &o.clock_channel, &o.status_channel})
-    if (c->empty()) throw FlagError("a channel flag is empty");
+  // (an empty channel flag is refused while parsing: refuse_empty_values)
 }
 
 // The world with its starts placed; throws fact::FormatError (bad file) or FlagError.

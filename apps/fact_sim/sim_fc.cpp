@@ -159,8 +159,10 @@ void SimFc::on_setpoint(const mav::SetPositionTargetLocalNed& m, int64_t t) {
     if ((use_p[k] && std::abs(ned_p[k]) > sim::kMaxSetpointPosition) ||
         (use_v[k] && std::abs(ned_v[k]) > sim::kMaxSetpointVelocity) ||
         (use_a[k] && std::abs(ned_a[k]) > sim::kMaxSetpointAcceleration)) {
-      reject("fc_rejected_range", what + " " + kNedAxis[k] + " axis out of range (|position| <= 1000 m, |velocity| <= 100 m/s, "
-                                             "|acceleration| <= 100 m/s^2): " + num(ned_p[k]) + ", " + num(ned_v[k]) + ", " + num(ned_a[k]));
+      reject("fc_rejected_range", what + " " + kNedAxis[k] + " axis out of range (|position| <= " +
+                                      num(sim::kMaxSetpointPosition) + " m, |velocity| <= " + num(sim::kMaxSetpointVelocity) +
+                                      " m/s, |acceleration| <= " + num(sim::kMaxSetpointAcceleration) + " m/s^2): " +
+                                      num(ned_p[k]) + ", " + num(ned_v[k]) + ", " + num(ned_a[k]));
       return;
     }
   }
