@@ -17,16 +17,15 @@
 // read, is damaged or is not an LCM log, or the output named as an input (nothing is written then).
 #include "common/cli_checks.h"
 #include "common/log_reader.h"
+#include "fact/file_write.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
-#include <sys/stat.h>
 
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -65,12 +64,6 @@ struct Input {
   }
 };
 
-// Whether two paths name one file (the output named as an input would be truncated before it is read).
-bool same_file(const std::string& a, const std::string& b) {
-  struct stat sa {}, sb {};
-  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -88,13 +81,13 @@ int main(int argc, char** argv) {
   }
   std::vector<Input> in(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
-    if (same_file(inputs[i], output)) {
+    if (fact::same_file(inputs[i], output)) {
       std::cerr << kApp << ": error: --output " << output << " is input " << i + 1 << " (" << inputs[i]
                 << "): it would be overwritten before it is read\n";
       return 2;
     }
     for (size_t j = 0; j < i; ++j)
-      if (same_file(inputs[i], inputs[j])) {  // (its events would be merged twice)
+      if (fact::same_file(inputs[i], inputs[j])) {  // (its events would be merged twice)
         std::cerr << kApp << ": error: input " << i + 1 << " (" << inputs[i] << ") is input " << j + 1 << " ("
                   << inputs[j] << ") again\n";
         return 2;
@@ -107,24 +100,16 @@ int main(int argc, char** argv) {
     }
     in[i].advance();
   }
-  // Written to a fresh OUTPUT.partial-XXXXXX (mkstemp: never an existing file, such as an input
-  // named OUTPUT.partial, which was truncated and removed) and renamed at the end: a damaged input
-  // or a failed write leaves nothing at OUTPUT.
-  std::string partial = output + ".partial-XXXXXX";
-  const int partial_fd = ::mkstemp(partial.data());
+  // Written to a fresh OUTPUT.partial-XXXXXX (fact::open_partial_file: never an existing file, such
+  // as an input named OUTPUT.partial, which was truncated and removed; with the old output's mode,
+  // or 0666 less the umask, not mkstemp's 0600, which made run.lcm unreadable to others: review,
+  // session 33) and renamed at the end: a damaged input or a failed write leaves nothing at OUTPUT.
+  std::string partial;
+  const int partial_fd = fact::open_partial_file(output, &partial);
   if (partial_fd < 0) {
     std::cerr << kApp << ": error: cannot write " << output << ".partial-*: " << std::strerror(errno) << "\n";
     return 1;
   }
-  // mkstemp makes the file 0600: give it the old output's mode, or what a new file gets (0666 less
-  // the umask), as the fixed-name partial had (review, session 33: run.lcm became unreadable to
-  // others).
-  struct stat old_output {};
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  const mode_t mode = ::stat(output.c_str(), &old_output) == 0 ? (old_output.st_mode & 07777) : (0666 & ~mask);
-  if (::fchmod(partial_fd, mode) != 0)
-    std::cerr << kApp << ": warning: cannot set the mode of " << partial << ": " << std::strerror(errno) << "\n";
   ::close(partial_fd);
   const auto fail = [&](int code, const std::string& why) {
     std::cerr << kApp << ": error: " << why << "\n";

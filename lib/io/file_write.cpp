@@ -74,6 +74,24 @@ std::string regular_target(const std::string& path, bool* stream) {
 
 }  // namespace
 
+int open_partial_file(const std::string& target, std::string* partial) {
+  struct stat st {};
+  const bool exists = ::stat(target.c_str(), &st) == 0;
+  *partial = target + ".partial-XXXXXX";
+  const int fd = ::mkstemp(partial->data());
+  if (fd < 0) return -1;
+  // The file keeps its mode and owner; a new one gets 0666 less the umask, as open() would give.
+  if (exists) {
+    (void)::fchmod(fd, st.st_mode & 07777);
+    (void)::fchown(fd, st.st_uid, st.st_gid);  // (only root may; otherwise the owner is the writer)
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    (void)::fchmod(fd, 0666 & ~mask);
+  }
+  return fd;
+}
+
 std::string write_file_atomically(const std::string& path, const std::string& text) {
   struct stat st {};
   std::string target = path;
@@ -86,22 +104,10 @@ std::string write_file_atomically(const std::string& path, const std::string& te
     else if (!S_ISREG(st.st_mode)) target = "";
     if (target.empty()) return write_in_place(path, text, stream);
     if (::stat(target.c_str(), &st) != 0) return write_in_place(path, text, false);
-  } else {
-    st.st_mode = 0;
   }
-  // A fresh name in the target's directory (mkstemp: O_EXCL, never an existing file or link).
-  std::string partial = target + ".partial-XXXXXX";
-  const int fd = ::mkstemp(partial.data());
+  std::string partial;
+  const int fd = open_partial_file(target, &partial);
   if (fd < 0) return path + ": cannot create a temporary file beside it: " + std::strerror(errno);
-  // The file keeps its mode and owner; a new one gets 0666 less the umask, as open() would give.
-  if (st.st_mode != 0) {
-    (void)::fchmod(fd, st.st_mode & 07777);
-    (void)::fchown(fd, st.st_uid, st.st_gid);  // (only root may; otherwise the owner is the writer)
-  } else {
-    const mode_t mask = ::umask(0);
-    ::umask(mask);
-    (void)::fchmod(fd, 0666 & ~mask);
-  }
   std::string e = write_all(fd, text);
   if (e.empty() && ::fsync(fd) != 0) e = std::strerror(errno);
   if (::close(fd) != 0 && e.empty()) e = std::strerror(errno);

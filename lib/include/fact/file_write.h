@@ -16,6 +16,12 @@ namespace fact {
 // the old contents. Returns "" or the reason, naming the path.
 std::string write_file_atomically(const std::string& path, const std::string& text);
 
+// The partial file write_file_atomically writes into, for a writer that streams (fact-log-merge):
+// a fresh "<target>.partial-XXXXXX" beside `target` (mkstemp: O_EXCL, never an existing file or
+// link), with target's mode and owner when it exists, else 0666 less the umask, as open() gives.
+// Returns its descriptor, with its name in *partial, or −1 (errno set).
+int open_partial_file(const std::string& target, std::string* partial);
+
 // Whether two paths name the same file: the same device and inode when both exist, else the same
 // path once made absolute and normalised ("a.json" and "./a.json").
 bool same_file(const std::string& a, const std::string& b);
