@@ -26,7 +26,6 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -503,13 +502,11 @@ std::string read_png_dir(const std::string& dir, fact::CameraIntrinsics* k, std:
   std::map<int64_t, PngPair> found;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
-    const std::string suffix = "_gray.png";
-    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
-    const std::string stem = name.substr(0, name.size() - suffix.size());
-    if (stem.empty() || stem.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string stem;
     int64_t t = 0;
-    const auto [end, err] = std::from_chars(stem.data(), stem.data() + stem.size(), t);
-    if (err != std::errc() || end != stem.data() + stem.size())
+    const fact::PngFrameName kind = fact::png_frame_name(name, &stem, &t);
+    if (kind == fact::PngFrameName::other) continue;
+    if (kind == fact::PngFrameName::time_too_large)
       return (fs::path(dir) / name).string() + ": the time " + stem + " µs does not fit in 64 bits";
     found[t] = PngPair{t, entry.path(), fs::path(dir) / (stem + "_depth.png")};
   }

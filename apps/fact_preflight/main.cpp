@@ -33,7 +33,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <cmath>
@@ -103,9 +102,10 @@ Item check_key(const Options& o) {
 }
 
 // As fact-detector reads the directory: intrinsics.json that it accepts (read_intrinsics_file),
-// and <utime>_gray.png + <utime>_depth.png pairs, utime a whole number of µs (files with other
-// names are ignored there, so they do not count here). A bad intrinsics.json or non-numeric names
-// used to pass, and a symbolic link loop threw out of the check (review, session 33).
+// and <utime>_gray.png + <utime>_depth.png pairs named as it names them (png_frame_name: files
+// with other names are ignored there, so they do not count here). A bad intrinsics.json or
+// non-numeric names used to pass, and a symbolic link loop threw out of the check (review,
+// session 33).
 Item check_png_dir(const std::string& dir) {
   Item it{"camera", false, ""};
   std::error_code ec;
@@ -122,13 +122,11 @@ Item check_png_dir(const std::string& dir) {
   int pairs = 0;
   for (fs::directory_iterator entry(dir, ec), end; !ec && entry != end; entry.increment(ec)) {
     const std::string n = entry->path().filename().string();
-    const auto at = n.rfind("_gray.png");
-    if (at == std::string::npos || at + 9 != n.size() || at == 0) continue;
-    const std::string stem = n.substr(0, at);
-    if (stem.find_first_not_of("0123456789") != std::string::npos) continue;
-    int64_t utime = 0;  // (the detector refuses the directory when a time does not fit in 64 bits)
-    const auto [end_of_time, parse] = std::from_chars(stem.data(), stem.data() + stem.size(), utime);
-    if (parse != std::errc() || end_of_time != stem.data() + stem.size()) {
+    std::string stem;
+    int64_t utime = 0;
+    const fact::PngFrameName kind = fact::png_frame_name(n, &stem, &utime);
+    if (kind == fact::PngFrameName::other) continue;
+    if (kind == fact::PngFrameName::time_too_large) {  // (the detector refuses the directory)
       it.seen = (fs::path(dir) / n).string() + ": the time " + stem + " us does not fit in 64 bits";
       return it;
     }

@@ -16,6 +16,7 @@
 #include <cctype>
 #include <climits>
 #include <cmath>
+#include <charconv>
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
@@ -600,6 +601,17 @@ CameraIntrinsics intrinsics_from_json(const std::string& text) {
     *focal = number(need(doc, "", key), member("", key));
   if (const std::string e = intrinsics_error(k); !e.empty()) throw FormatError(e);  // (it names the field)
   return k;
+}
+
+PngFrameName png_frame_name(const std::string& filename, std::string* stem, int64_t* utime) {
+  const std::string suffix = "_gray.png";
+  if (filename.size() <= suffix.size() ||
+      filename.compare(filename.size() - suffix.size(), suffix.size(), suffix) != 0)
+    return PngFrameName::other;
+  *stem = filename.substr(0, filename.size() - suffix.size());
+  if (stem->find_first_not_of("0123456789") != std::string::npos) return PngFrameName::other;
+  const auto [end, error] = std::from_chars(stem->data(), stem->data() + stem->size(), *utime);
+  return error == std::errc() && end == stem->data() + stem->size() ? PngFrameName::frame : PngFrameName::time_too_large;
 }
 
 CameraIntrinsics read_intrinsics_file(const std::string& path) {

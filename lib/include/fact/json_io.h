@@ -62,6 +62,7 @@
 #include "fact/rounds.h"
 #include "fact/simgen.h"
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -92,5 +93,12 @@ std::vector<Obstacle> obstacles_from_json(const std::string& text);
 CameraIntrinsics intrinsics_from_json(const std::string& text);
 // The same from the file at `path` (a regular file of at most 1 MiB); FormatErrors name the path.
 CameraIntrinsics read_intrinsics_file(const std::string& path);
+
+// A file name in such a --png-dir: "<utime>_gray.png" (utime in µs, decimal digits) is a frame's
+// gray image, its depth image "<utime>_depth.png" beside it; any other name is no frame. A time
+// that does not fit in 64 bits makes the directory unusable (fact-detector refuses it, and
+// fact-preflight fails it).
+enum class PngFrameName { other, frame, time_too_large };
+PngFrameName png_frame_name(const std::string& filename, std::string* stem, int64_t* utime);
 
 }  // namespace fact
