@@ -8,6 +8,9 @@
 #
 #   test/test_unclear_flag_values.sh BINARY=FLAG:int|text...
 set -u
+# Apps that got past their flags would open LCM's default URL: memq://, in process, so that even a
+# failing case sends no udpm outside a private namespace.
+export LCM_DEFAULT_URL=memq://
 [ "$#" -gt 0 ] || { echo "usage: $0 BINARY=FLAG:int|text..." >&2; exit 2; }
 failures=0 runs=0
 check() {  # check BINARY FLAG VALUE EXPECTED_TEXT
