@@ -8,8 +8,8 @@ packages=(
   nlohmann-json3-dev libcli11-dev           # JSON files, command lines
   gnuplot-nox                               # benchmark plots (PNG)
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev  # LCM: library, lcm-gen/lcm-spy/logger/logplayer, Java
-  default-jdk-headless libjchart2d-java     # the lcm-spy jar of our types; lcm-spy's charts
-  xvfb x11-apps                             # lcm-spy test under a virtual display (xwd screenshot)
+  default-jdk-headless default-jre libjchart2d-java  # the jar of our types; lcm-spy's window (AWT on X11), charts
+  xvfb x11-apps x11-utils                   # lcm-spy test under a virtual display (xwd screenshot, xwininfo)
   libsodium-dev                             # gossip authentication (crypto_auth)
   iproute2                                  # private network namespaces for udpm tests
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-dnn-dev  # detector, PNG I/O
