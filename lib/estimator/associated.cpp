@@ -653,7 +653,7 @@ Solution solve_graph(const Problem& p, const PointSets& points, std::vector<Edge
 
 }  // namespace
 
-Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) {
+Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options, std::vector<int>* ambiguous) {
   Estimate out;
   out.mode = Mode::associated;
   out.status = EstimateStatus::ambiguous;
@@ -674,6 +674,15 @@ Estimate estimate_associated(const Problem& p, const sdp::Options& sdp_options) 
   std::vector<int> outside;
   for (int i = 0; i < p.drones(); ++i)
     if (!std::count(s.members.begin(), s.members.end(), i)) outside.push_back(i);
+  if (ambiguous) {
+    ambiguous->clear();
+    for (int i : outside)
+      for (const Edge& e : edges)
+        if (e.kind == EdgeKind::ambiguous && (e.i == i || e.j == i)) {
+          ambiguous->push_back(i);
+          break;
+        }
+  }
   const bool sdp_unique =
       s.members.size() >= 2 && s.sdp.status == sdp::Status::certified_unique && s.sdp.Y.cols() >= 2;
   if (s.members.size() >= 2 && !sdp_unique) {

@@ -110,6 +110,9 @@ std::vector<double> yaws_from_sdp(const sdp::Result& r, int reference);
 Estimate estimate_summed(const Problem& problem, bool complex_form, const sdp::Options& sdp_options);
 
 // Yaw-invariant association of mutual pairs, certified synchronisation, least-squares translation.
-Estimate estimate_associated(const Problem& problem, const sdp::Options& sdp_options);
+// When `ambiguous` is given it receives the drones (indices) left unresolved that have a pair which
+// several poses explain about equally well (an ambiguous edge: a symmetric formation, say).
+Estimate estimate_associated(const Problem& problem, const sdp::Options& sdp_options,
+                             std::vector<int>* ambiguous = nullptr);
 
 }  // namespace fact::estimator

@@ -81,6 +81,9 @@ std::string validate_rounds(const Rounds& rounds) {
     const auto at = [&] { return "round " + std::to_string(k) + " (index " + std::to_string(round.index) + "): "; };
     for (const auto& [id, drone] : round.drones) {
       if (!ids.count(id)) return at() + "drone " + std::to_string(id) + " is not in the swarm's drone list";
+      if (drone.observations.size() > static_cast<size_t>(kMaxObservations))
+        return at() + "drone " + std::to_string(id) + ": " + std::to_string(drone.observations.size()) +
+               " observations, at most " + std::to_string(kMaxObservations) + " per drone and round";
       const std::string e = check_drone(drone);
       if (!e.empty()) return at() + "drone " + std::to_string(id) + ": " + e;
     }

@@ -44,9 +44,13 @@ struct Rounds {
 // search and the SDP grow past any flight's budget, and a file listing 200 000 ids took 20 GB
 // before failing: review, session 32).
 constexpr int kMaxDrones = 256;
+// The most observations one drone reports in one round, as the gossip passes on (GossipOptions::
+// max_observations): the association pairs every detection of one drone with every one of
+// another's, and 200 detections each took 16 s, 400 over 5 min (review, session 34).
+constexpr int kMaxObservations = 64;
 
 // Checks the data a decoder produced: ids unique and known, every number finite, 2 … kMaxDrones
-// drones, round indexes strictly increasing (the last round is the latest). Returns "" when usable, otherwise one line naming the round, the drone, the field and
+// drones, at most kMaxObservations observations per drone and round, round indexes strictly increasing (the last round is the latest). Returns "" when usable, otherwise one line naming the round, the drone, the field and
 // the value, e.g. "round 2 (index 2): drone 5: observations[1].vector[0] is nan".
 std::string validate_rounds(const Rounds& rounds);
 
