@@ -19,7 +19,21 @@ if [ "${FACT_BRIDGE_BENCH_IN_NETNS:-}" != 1 ]; then
   FACT_BRIDGE_BENCH_IN_NETNS=1 exec "$here/../scripts/netns-run.sh" bash "$0" "$build" "$seconds"
 fi
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+pid=
+# On any failure: the bridge is stopped and both logs are shown (a failed peer used to end the
+# script silently, its log deleted and the bridge left running; review, session 34).
+finish() {
+  local rc=$?
+  set +e  # (a bridge killed here makes wait fail; errexit would end the trap before the logs)
+  [ -n "$pid" ] && kill "$pid" 2>/dev/null && wait "$pid" 2>/dev/null
+  if [ "$rc" -ne 0 ]; then
+    echo "bridge_bench: failed (exit $rc)" >&2
+    for f in peer bridge; do [ -s "$work/$f.log" ] && { echo "--- $f log:" >&2; tail -n 20 "$work/$f.log" >&2; }; done
+  fi
+  rm -rf "$work"
+  exit "$rc"
+}
+trap finish EXIT
 url='udpm://239.255.76.67:7667?ttl=0'
 "$bridge" --drone-id 0 --lcm-url "$url" --udp 14700:127.0.0.1:14701 --stream-rate 50 2>"$work/bridge.log" &
 pid=$!
@@ -28,7 +42,9 @@ sleep 0.3
   --setpoint-rate 50 --odometry-rate 100 2>"$work/peer.log"
 kill -INT "$pid"
 wait "$pid"
+pid=
 line=$(grep -o 'cpu_s=.*' "$work/bridge.log" | tail -1)
+[ -n "$line" ] || { echo "bridge_bench: the bridge reported no cpu_s line" >&2; exit 1; }
 cpu=$(sed -E 's/.*cpu_s=([0-9.e-]+).*/\1/' <<<"$line")
 wall=$(sed -E 's/.*wall_s=([0-9.e-]+).*/\1/' <<<"$line")
 result=$(awk -v c="$cpu" -v w="$wall" 'BEGIN { printf "%.2f", 100 * c / w }')
@@ -38,4 +54,7 @@ result=$(awk -v c="$cpu" -v w="$wall" 'BEGIN { printf "%.2f", 100 * c / w }')
   echo "bridge: $line"
   echo "peer: $(cat "$work/peer.log")"
   echo "cpu_percent_of_one_core: $result  (target <= 2)"
-} | tee "$here/results/bridge.txt"
+} >"$work/bridge.txt"
+cat "$work/bridge.txt"
+mkdir -p "$here/results"
+cp "$work/bridge.txt" "$here/results/bridge.txt.partial" && mv "$here/results/bridge.txt.partial" "$here/results/bridge.txt"

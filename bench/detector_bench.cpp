@@ -35,6 +35,8 @@
 #include "fact/sim_world.h"
 #include "fact/tracker.h"
 #include "fact/world_io.h"
+#include "common/cli_checks.h"
+#include "results_file.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -78,10 +80,13 @@ struct Options {
   float min_score = fact::TrackerOptions{}.high_score;
 };
 
+// The middle value, or the mean of the two middle values of an even count (it was the upper one).
 double median(std::vector<double> v) {
   if (v.empty()) return NAN;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  const size_t h = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + h, v.end());
+  if (v.size() % 2) return v[h];
+  return 0.5 * (v[h] + *std::max_element(v.begin(), v.begin() + h));
 }
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return NAN;
@@ -121,6 +126,10 @@ struct Tracking {
 
 struct Counts {
   std::vector<Bin> bins;
+  // Within --eligible-range, counted as each target or detection is seen: recall and errors by the
+  // true range, precision by the estimated range. (Summing the 1 m bins whose upper edge was within
+  // the range dropped the last part bin: --eligible-range 7.5 gave the recall within 7 m.)
+  Bin within;
   long all_detections = 0, all_true = 0;  // every score, eligible range (by estimated range)
   long truncated = 0, truncated_found = 0;  // unoccluded targets cut by the image border, any score
   Tracking mot;
@@ -245,6 +254,8 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
         if (dets[d].score < o.min_score) continue;
         Bin& b = c->bins[bin_of(r_hat, o)];
         ++b.detections;
+        const bool within_range = r_hat <= o.eligible_range;
+        c->within.detections += within_range;
         if (m[d] < 0) {
           if (o.list_false) {
             std::ostringstream fp;
@@ -260,13 +271,20 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
           continue;
         }
         ++b.truthful;
+        c->within.truthful += within_range;
         const fact::sim::TargetTruth& tt = truth[visible_truth[m[d]]];
         found[visible_truth[m[d]]] = true;
         if (!unoccluded(tt) || !tv.valid) continue;
         Bin& tb = c->bins[bin_of(tt.range, o)];
-        tb.range_err.push_back(std::abs(tv.range - tt.range) / tt.range);
+        const double range_err = std::abs(tv.range - tt.range) / tt.range;
         const double cosang = tv.vector_g.normalized().dot(tt.vector_g.normalized());
-        tb.bearing_err.push_back(std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI);
+        const double bearing_err = std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI;
+        tb.range_err.push_back(range_err);
+        tb.bearing_err.push_back(bearing_err);
+        if (tt.range <= o.eligible_range) {
+          c->within.range_err.push_back(range_err);
+          c->within.bearing_err.push_back(bearing_err);
+        }
       }
       for (size_t j = 0; j < truth.size(); ++j) {
         const fact::sim::TargetTruth& tt = truth[j];
@@ -277,6 +295,7 @@ void run_episode(const Options& o, int episode, const fact::DepthNoise& noise, C
         Bin& b = c->bins[bin_of(truth[j].range, o)];
         ++b.eligible;
         if (found[j]) ++b.found;
+        if (eligible(truth[j])) ++c->within.eligible, c->within.found += found[j];
       }
 
       // Tracking quality (confirmed tracks matched this frame).
@@ -341,24 +360,30 @@ std::string fmt(double v, int digits = 3) {
 int main(int argc, char** argv) {
   Options o;
   CLI::App cli{"fact-bench-detector: the depth detector and tracker against the simulator's ground truth"};
-  cli.add_option("--episodes", o.episodes, "Episodes (one full spin of every drone each)")->capture_default_str();
-  cli.add_option("--drones", o.drones, "Drones per episode (>= 2)")->capture_default_str();
-  cli.add_option("--seed", o.seed, "Seed of the worlds, heights and phases")->capture_default_str();
+  cli.add_option("--episodes", o.episodes, "Episodes (one full spin of every drone each)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  cli.add_option("--drones", o.drones, "Drones per episode (>= 2)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  cli.add_option("--seed", o.seed, "Seed of the worlds, heights and phases")->capture_default_str()
+      ->check(fact::app::uint64_text());
   cli.add_option("--world", o.world_file, "A fact-world-v1 file (default: the built-in default world)");
   cli.add_option("--spin-rate", o.spin_rate, "rad/s")->capture_default_str();
   cli.add_option("--camera-rate", o.camera_rate, "Hz")->capture_default_str();
   cli.add_option("--wobble", o.wobble, "rad, roll/pitch wobble amplitude")->capture_default_str();
   cli.add_option("--eligible-range", o.eligible_range, "m, eligible targets are at most this far")->capture_default_str();
-  cli.add_option("--render-frames", o.render_frames, "Frames timed for the renderer figure")->capture_default_str();
+  cli.add_option("--render-frames", o.render_frames, "Frames timed for the renderer figure")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   cli.add_option("--out-dir", o.out_dir, "Where detector.csv and detector_summary.txt go")->capture_default_str();
   cli.add_option("--min-score", o.min_score, "Operating point: detections scoring at least this count")
       ->capture_default_str();
   cli.add_flag("--list-false", o.list_false, "Print every false detection with the visible drones' boxes");
   bool quick = false;
   cli.add_flag("--quick", quick, "2 episodes, 60 renderer frames (a smoke run)");
+  fact::app::refuse_empty_values(cli);
   CLI11_PARSE(cli, argc, argv);
   if (quick) o.episodes = 2, o.render_frames = 60;
-  if (o.episodes < 1 || o.drones < 2 || !(o.spin_rate > 0) || !(o.camera_rate > 0) || !(o.eligible_range > 0)) {
+  if (o.episodes < 1 || o.drones < 2 || o.render_frames < 1 || !(o.spin_rate > 0) || !(o.camera_rate > 0) ||
+      !(o.eligible_range > 0)) {
     std::cerr << "fact-bench-detector: --episodes >= 1, --drones >= 2, --spin-rate, --camera-rate and "
                  "--eligible-range > 0 are required\n";
     return 2;
@@ -379,11 +404,10 @@ int main(int argc, char** argv) {
   }
   const double fps = renderer_fps(o, noise);
 
-  std::filesystem::create_directories(o.out_dir);
-  std::ofstream csv(o.out_dir + "/detector.csv");
+  std::ostringstream csv;
   csv << "range_lo_m,range_hi_m,eligible,found,recall,detections,true_detections,precision,"
          "median_range_error_pct,median_bearing_error_deg\n";
-  Bin within;  // eligible range, summed
+  const Bin& within = c.within;
   for (size_t b = 0; b < c.bins.size(); ++b) {
     const Bin& x = c.bins[b];
     const double lo = b * o.bin, hi = (b + 1) * o.bin;
@@ -391,12 +415,6 @@ int main(int argc, char** argv) {
         << fmt(x.eligible ? double(x.found) / x.eligible : NAN, 4) << "," << x.detections << "," << x.truthful << ","
         << fmt(x.detections ? double(x.truthful) / x.detections : NAN, 4) << "," << fmt(100 * median(x.range_err), 3)
         << "," << fmt(median(x.bearing_err), 3) << "\n";
-    if (hi <= o.eligible_range + 1e-9) {
-      within.eligible += x.eligible, within.found += x.found, within.detections += x.detections;
-      within.truthful += x.truthful;
-      within.range_err.insert(within.range_err.end(), x.range_err.begin(), x.range_err.end());
-      within.bearing_err.insert(within.bearing_err.end(), x.bearing_err.begin(), x.bearing_err.end());
-    }
   }
   const Tracking& t = c.mot;
   const double mota = t.gt ? 1.0 - double(t.fn + t.fp + t.idsw) / t.gt : NAN;
@@ -421,7 +439,13 @@ int main(int argc, char** argv) {
     << fmt(percentile(c.detect_ms, 0.95), 3) << "), tracker median " << fmt(median(c.track_ms), 4) << " ms (p95 "
     << fmt(percentile(c.track_ms, 0.95), 4) << ")\n"
     << "renderer: " << fmt(fps, 1) << " frames/s at 424x240 with 4 drones (one core)\n";
-  std::ofstream(o.out_dir + "/detector_summary.txt") << s.str();
+  try {
+    fact::bench::write_results_file(o.out_dir + "/detector.csv", csv.str());
+    fact::bench::write_results_file(o.out_dir + "/detector_summary.txt", s.str());
+  } catch (const std::exception& ex) {
+    std::cerr << "fact-bench-detector: " << ex.what() << "\n";
+    return 1;
+  }
   std::cout << s.str();
   std::cout << "wrote " << o.out_dir << "/detector.csv and " << o.out_dir << "/detector_summary.txt\n";
   return 0;

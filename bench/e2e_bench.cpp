@@ -23,9 +23,13 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <tuple>
 #include <utility>
 #include <vector>
+
+#include "common/cli_checks.h"
+#include "results_file.h"
 
 namespace {
 
@@ -284,7 +288,7 @@ double drone_cpu_percent(const Run& r) {
 // e2e.csv and e2e_summary.txt in out_dir from the runs of each size; the summary is also printed.
 void write_summaries(const std::string& out_dir, const std::map<int, std::vector<Run>>& by_size,
                      const std::string& title) {
-  std::ofstream csv(out_dir + "/e2e.csv");
+  std::ostringstream csv;
   csv << "drones,runs,success_percent,certified_wrong,time_median_s,time_p90_s,rounds_median,yaw_mae_rad,"
          "position_median_m,cpu_per_drone_percent\n";
   std::ostringstream summary;
@@ -307,7 +311,8 @@ void write_summaries(const std::string& out_dir, const std::map<int, std::vector
     }
     std::vector<double> sorted = times;
     std::sort(sorted.begin(), sorted.end());
-    const double p90 = sorted.empty() ? NAN : sorted[std::min(sorted.size() - 1, sorted.size() * 9 / 10)];
+    // Nearest rank, ⌈0.9 n⌉ (it was index ⌊0.9 n⌋: the maximum of 10 runs)
+    const double p90 = sorted.empty() ? NAN : sorted[(sorted.size() * 9 + 9) / 10 - 1];
     const double success = 100.0 * ok / static_cast<double>(runs.size());
     csv << n << ',' << runs.size() << ',' << success << ',' << wrong << ',' << median(times) << ',' << p90 << ','
         << median(rounds) << ',' << mean(yaw) << ',' << median(pos) << ',' << mean(cpu) << '\n';
@@ -316,7 +321,8 @@ void write_summaries(const std::string& out_dir, const std::map<int, std::vector
                   runs.size(), success, wrong, median(times), p90, median(rounds), mean(yaw), median(pos), mean(cpu));
     summary << line;
   }
-  std::ofstream(out_dir + "/e2e_summary.txt") << summary.str();
+  fact::bench::write_results_file(out_dir + "/e2e.csv", csv.str());
+  fact::bench::write_results_file(out_dir + "/e2e_summary.txt", summary.str());
   std::cout << summary.str();
 }
 
@@ -332,18 +338,18 @@ int summarize(const Options& o) {
   }
   std::map<int, std::vector<Run>> by_size;
   for (const Run& r : runs) by_size[r.drones].push_back(r);
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  std::ofstream runs_csv(o.out_dir + "/e2e_runs.csv");
-  if (!runs_csv) {
-    std::cerr << "fact-bench-e2e: error: --out-dir: cannot write " << o.out_dir << "/e2e_runs.csv\n";
-    return 1;
-  }
+  std::ostringstream runs_csv;
   runs_csv << runs_header() << '\n';
   for (const Run& r : runs) write_run_row(runs_csv, r);
   std::string title = "summary of " + std::to_string(runs.size()) + " runs from";
   for (const std::string& f : o.summarize) title += " " + f;
-  write_summaries(o.out_dir, by_size, title);
+  try {
+    fact::bench::write_results_file(o.out_dir + "/e2e_runs.csv", runs_csv.str());
+    write_summaries(o.out_dir, by_size, title);
+  } catch (const std::exception& e) {
+    std::cerr << "fact-bench-e2e: error: --out-dir: cannot write " << o.out_dir << ": " << e.what() << "\n";
+    return 1;
+  }
   std::cout << "wrote " << o.out_dir << "/e2e_runs.csv, e2e.csv, e2e_summary.txt\n";
   return 0;
 }
@@ -355,8 +361,9 @@ int main(int argc, char** argv) {
   CLI::App cli{"fact-bench-e2e: whole simulated initializations (scripts/run-sim.sh --fast) per swarm size and seed:\n"
                "success rate, certified-wrong count, time to the certified result, rounds, errors, CPU per app."};
   cli.add_option("--drones", o.drones, "Swarm sizes (comma separated)")->delimiter(',')->capture_default_str();
-  cli.add_option("--seeds", o.seeds, "Seeds per size")->capture_default_str();
-  cli.add_option("--first-seed", o.first_seed, "First seed")->capture_default_str();
+  cli.add_option("--seeds", o.seeds, "Seeds per size")->capture_default_str()->check(fact::app::decimal_integer());
+  cli.add_option("--first-seed", o.first_seed, "First seed (>= 0)")->capture_default_str()
+      ->check(fact::app::decimal_integer())->check(CLI::Range(0, 1 << 30));
   cli.add_option("--repo", o.repo, "Source tree (scripts/run-sim.sh); required unless --summarize");
   cli.add_option("--build", o.build, "Build tree with the apps (BUILD_DIR of run-sim.sh); required unless --summarize");
   cli.add_option("--world", o.world, "fact-world-v1 world (default: run-sim.sh's, the default world with obstacles)");
@@ -368,8 +375,16 @@ int main(int argc, char** argv) {
   cli.add_option("--summarize", o.summarize,
                  "Run nothing: merge these e2e_runs.csv files (batches of seeds) into <out-dir>/e2e_runs.csv\n"
                  "and write e2e.csv and e2e_summary.txt from them");
+  fact::app::refuse_empty_values(cli);
   CLI11_PARSE(cli, argc, argv);
   if (!o.summarize.empty()) return summarize(o);
+  // (NaN passes CLI11's ranges; a rate of 0 or a missing run-sim.sh made every run fail, and the
+  // benchmark wrote a 0 % success table and exited 0; review, session 34)
+  for (const auto& [flag, v] : {std::pair<const char*, double>{"--max-sim-time", o.max_sim_time}, {"--fast-rate", o.fast_rate}})
+    if (!(v > 0 && std::isfinite(v))) {
+      std::cerr << "fact-bench-e2e: error: " << flag << ": expected a finite number > 0, got " << v << "\n";
+      return 2;
+    }
   if (o.repo.empty() || o.build.empty()) {
     std::cerr << "fact-bench-e2e: error: --repo and --build are required to run (or give --summarize FILE...)\n";
     return 2;
@@ -383,45 +398,75 @@ int main(int argc, char** argv) {
     std::cerr << "fact-bench-e2e: error: --seeds: expected >= 1, got " << o.seeds << "\n";
     return 2;
   }
+  if (access((o.repo + "/scripts/run-sim.sh").c_str(), X_OK) != 0) {
+    std::cerr << "fact-bench-e2e: error: --repo: " << o.repo << "/scripts/run-sim.sh is not an executable script\n";
+    return 2;
+  }
+  if (!fs::is_directory(o.build)) {
+    std::cerr << "fact-bench-e2e: error: --build: " << o.build << " is not a folder\n";
+    return 2;
+  }
   if (o.work_dir.empty()) o.work_dir = o.out_dir + "/e2e-runs";
   fs::create_directories(o.out_dir);
   fs::create_directories(o.work_dir);
 
-  std::ofstream runs_csv(o.out_dir + "/e2e_runs.csv");
+  // e2e_runs.csv is rewritten whole after every run: what finished is kept, an old file is never
+  // left half-written.
+  std::ostringstream runs_csv;
   runs_csv << runs_header() << '\n';
+  int failed_setup = 0;  // run-sim.sh's exit code when it refused to run at all
 
-  std::map<int, std::vector<Run>> by_size;
-  const auto t0 = std::chrono::steady_clock::now();
-  const int total = static_cast<int>(o.drones.size()) * o.seeds;
-  int done = 0;
-  bool interrupted = false;
-  for (int n : o.drones) {
-    for (int s = o.first_seed; s < o.first_seed + o.seeds && !interrupted; ++s) {
-      const Run r = run_one(o, n, s);
-      // std::system ignores SIGINT in this process while run-sim.sh runs, so a Ctrl-C reaches only
-      // the run, which exits 130 (or dies of it): stop here and summarise the runs that finished.
-      if (r.exit_code == 128 + SIGINT) {
-        std::printf("[%d/%d] N=%d seed %d: interrupted; summarising the %d finished runs\n", done + 1, total, n, s, done);
-        interrupted = true;
-        break;
+  try {
+    std::map<int, std::vector<Run>> by_size;
+    const auto t0 = std::chrono::steady_clock::now();
+    const int total = static_cast<int>(o.drones.size()) * o.seeds;
+    int done = 0;
+    bool interrupted = false;
+    for (int n : o.drones) {
+      for (int s = o.first_seed; s < o.first_seed + o.seeds && !interrupted; ++s) {
+        const Run r = run_one(o, n, s);
+        // std::system ignores SIGINT in this process while run-sim.sh runs, so a Ctrl-C reaches only
+        // the run, which exits 130 (or dies of it): stop here and summarise the runs that finished.
+        if (r.exit_code == 128 + SIGINT) {
+          std::printf("[%d/%d] N=%d seed %d: interrupted; summarising the %d finished runs\n", done + 1, total, n, s, done);
+          interrupted = true;
+          break;
+        }
+        // 2: bad flags or world, 125: no private network namespace, 126/127: run-sim.sh or a tool it
+        // needs cannot run. Every other run would fail the same way: stop, and exit non-zero.
+        if (r.exit_code == 2 || r.exit_code >= 125) {
+          std::printf("[%d/%d] N=%d seed %d: run-sim.sh could not run (exit %d; its output: %s.out in %s); stopping\n",
+                      done + 1, total, n, s, r.exit_code, ("n" + std::to_string(n) + "-s" + std::to_string(s)).c_str(),
+                      o.work_dir.c_str());
+          failed_setup = r.exit_code;
+          interrupted = true;
+          break;
+        }
+        write_run_row(runs_csv, r);
+        fact::bench::write_results_file(o.out_dir + "/e2e_runs.csv", runs_csv.str());
+        by_size[n].push_back(r);
+        ++done;
+        const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("[%d/%d] N=%d seed %d: %s, t_cert %.1f s sim, rounds %d, yaw MAE %.4f rad, pos median %.3f m, "
+                    "%.0f s wall (elapsed %.0f s)%s%s\n",
+                    done, total, n, s, r.correct ? "certified+correct" : r.certified_wrong ? "CERTIFIED-WRONG" : "failed",
+                    r.time_to_certified, r.rounds, r.yaw_mae, r.position_median, r.wall_seconds, el,
+                    r.correct ? "" : ": ", r.correct ? "" : r.reason.c_str());
+        std::fflush(stdout);
       }
-      write_run_row(runs_csv, r);
-      runs_csv.flush();
-      by_size[n].push_back(r);
-      ++done;
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::printf("[%d/%d] N=%d seed %d: %s, t_cert %.1f s sim, rounds %d, yaw MAE %.4f rad, pos median %.3f m, "
-                  "%.0f s wall (elapsed %.0f s)%s%s\n",
-                  done, total, n, s, r.correct ? "certified+correct" : r.certified_wrong ? "CERTIFIED-WRONG" : "failed",
-                  r.time_to_certified, r.rounds, r.yaw_mae, r.position_median, r.wall_seconds, el,
-                  r.correct ? "" : ": ", r.correct ? "" : r.reason.c_str());
-      std::fflush(stdout);
     }
-  }
 
-  write_summaries(o.out_dir, by_size,
-                  std::to_string(o.seeds) + " seeds per size from " + std::to_string(o.first_seed) + ", world " +
-                      (o.world.empty() ? "default (obstacles)" : o.world) + ", --fast");
-  std::cout << "wrote " << o.out_dir << "/e2e_runs.csv, e2e.csv, e2e_summary.txt\n";
-  return 0;
+    if (done == 0) {
+      std::cerr << "fact-bench-e2e: no run finished; " << o.out_dir << " left as it was\n";
+      return 1;
+    }
+    write_summaries(o.out_dir, by_size,
+                    std::to_string(o.seeds) + " seeds per size from " + std::to_string(o.first_seed) + ", world " +
+                        (o.world.empty() ? "default (obstacles)" : o.world) + ", --fast");
+    std::cout << "wrote " << o.out_dir << "/e2e_runs.csv, e2e.csv, e2e_summary.txt\n";
+    return failed_setup != 0 ? 1 : 0;
+  } catch (const std::exception& e) {  // a results file that cannot be written
+    std::cerr << "fact-bench-e2e: error: " << e.what() << "\n";
+    return 1;
+  }
 }

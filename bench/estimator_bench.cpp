@@ -27,6 +27,8 @@
 #include "fact/rotation_cost.h"
 #include "fact/sdp.h"
 #include "fact/simgen.h"
+#include "common/cli_checks.h"
+#include "results_file.h"
 #include "rotation_baselines.h"
 
 namespace {
@@ -249,14 +251,14 @@ double total_us(const fact::Estimate& e, double fallback) {
 // ---------------------------------------------------------------------------------------------
 // Output helpers
 
+// One table's CSV, kept in memory and written whole by save() at the table's end: a table that
+// throws leaves its previous file in place (the files used to be truncated when a table began).
 struct Output {
-  std::ofstream csv;
+  std::ostringstream csv;
   std::string path;
   Output(const std::string& dir, const std::string& name, const std::vector<std::string>& comments,
          const std::string& header) {
     path = (std::filesystem::path(dir) / name).string();
-    csv.open(path);
-    if (!csv) throw std::runtime_error("cannot write " + path);
     for (const std::string& c : comments) csv << "# " << c << "\n";
     csv << header << "\n";
   }
@@ -265,8 +267,8 @@ struct Output {
     bool first = true;
     ((csv << (first ? "" : ",") << fields, first = false), ...);
     csv << "\n";
-    csv.flush();
   }
+  void save() const { fact::bench::write_results_file(path, csv.str()); }
 };
 
 struct Summary {
@@ -430,6 +432,7 @@ void table1(const Args& a, Summary& sum) {
          << "  plain tight " << st["sdp_plain"].tight << "/" << st["sdp_plain"].tight_known;
     sum.text << line.str() << "\n";
   }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -530,6 +533,7 @@ void mae_vs_noise(const Args& a, Summary& sum) {
       }
       sum.text << line.str() << "\n";
     }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 void mae_vs_n(const Args& a, Summary& sum) {
@@ -556,6 +560,7 @@ void mae_vs_n(const Args& a, Summary& sum) {
     }
     sum.text << line.str() << "\n";
   }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -681,6 +686,7 @@ void modes_table(const Args& a, Summary& sum) {
       for (const std::string& w : st.wrong_cases) sum.surprises.push_back(w);
     }
   }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 void robust_table(const Args& a, Summary& sum) {
@@ -712,6 +718,7 @@ void robust_table(const Args& a, Summary& sum) {
              << fixed(median(st.pos_err), 4) << "\n";
     for (const std::string& w : st.wrong_cases) sum.surprises.push_back(w);
   }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 // The default (field) noise model, which allows for a drifting VIO, on the same depth scenarios
@@ -754,6 +761,7 @@ void field_model_table(const Args& a, Summary& sum) {
                << fixed(mean(st.yaw_err), 4) << "  " << fixed(median(st.pos_err), 4) << "\n";
       for (const std::string& w : st.wrong_cases) sum.surprises.push_back(w);
     }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -803,6 +811,7 @@ void symmetric_table(const Args& a, Summary& sum) {
       sum.text << "  N=" << n << " " << std::left << std::setw(10) << fact::to_string(mode) << std::right << ": " << cert
                << " / " << amb << " / " << wrong << "  (of " << scenarios << ")\n";
     }
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -868,6 +877,7 @@ void speed_table(const Args& a, Summary& sum) {
             << " us over " << calls << " calls  (target 20 us, paper 400 us)\n";
   sum.text << "  hungarian 8x16: median " << fixed(median(us), 2) << " us, p95 " << fixed(p95(us), 2)
            << " us (target <= 20 us; paper 400 us)\n";
+  out.save();  // the whole table, atomically (results_file.h)
 }
 
 }  // namespace
@@ -880,26 +890,34 @@ int main(int argc, char** argv) {
       "Writes estimator_*.csv and estimator_summary.txt to --out-dir."};
   app.add_option("--out-dir", a.out_dir, "folder for the CSV files and the summary (created)")->capture_default_str();
   app.add_option("--scenarios", a.scenarios, "scenarios per table row")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_flag("--quick", a.quick, "small sizes and 3 scenarios: a smoke run of a few seconds");
   app.add_option("--max-n", a.max_n, "largest N in the modes and robustness tables")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
   app.add_option("--max-n-summed", a.max_n_summed, "largest N for modes paper and complex in the modes table")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
   app.add_option("--seed", a.seed, "base seed; scenario seed = seed*1e7 + table*1e5 + N*1e3 + scenario")
+      ->check(fact::app::uint64_text())
       ->capture_default_str();
   app.add_option("--reps", a.reps, "Table I: timed repetitions of each solve (median)")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   app.add_option("--starts", a.starts, "Table I: random starts of the multi-start GN/LM")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--speed-reps", a.speed_reps, "speed table: repetitions per scenario (median)")
+      ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  fact::app::refuse_empty_values(app);
   CLI11_PARSE(app, argc, argv);
 
   const auto start = Clock::now();
@@ -932,7 +950,7 @@ int main(int argc, char** argv) {
     const std::string summary_path = (std::filesystem::path(a.out_dir) / "estimator_summary.txt").string();
     sum.files.push_back(summary_path);
     for (const std::string& f : sum.files) sum.text << "  " << f << "\n";
-    std::ofstream(summary_path) << sum.text.str();
+    fact::bench::write_results_file(summary_path, sum.text.str());
     std::cout << "\n== Summary\n" << sum.text.str();
   } catch (const std::exception& e) {
     std::cerr << "fact-bench-estimator: " << e.what() << "\n";

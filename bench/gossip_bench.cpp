@@ -29,6 +29,7 @@
 //              relay, gossip, solver and the chain's sum (target: the chain <= 5 % of one core).
 // Writes --out (default bench/results/gossip.csv, relative to the current directory) and prints
 // the figures.
+#include "common/cli_checks.h"
 #include "common/convert.h"
 #include "fact/app_status_t.hpp"
 #include "fact/detections_t.hpp"
@@ -38,6 +39,7 @@
 #include "fact/swarm_result_t.hpp"
 #include "fact/swarm_rounds_t.hpp"
 #include "fact_gossip/wire.h"
+#include "results_file.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -164,6 +166,18 @@ class Processes {
     posix_spawn_file_actions_destroy(&fa);
     children_.push_back(c);
     return children_.back();
+  }
+  // Throws, naming the process, its exit and the log, when one of them has exited already (a relay
+  // that refused its flags used to leave the scenario running on, with figures of nothing;
+  // review, session 34). waitid with WNOWAIT leaves the child to stop_all's wait4.
+  void require_running(const std::string& scenario) const {
+    for (const auto& c : children_) {
+      siginfo_t info{};
+      if (waitid(P_PID, static_cast<id_t>(c.pid), &info, WEXITED | WNOHANG | WNOWAIT) != 0 || info.si_pid == 0) continue;
+      const std::string how = info.si_code == CLD_EXITED ? "exited with code " + std::to_string(info.si_status)
+                                                         : "was killed by signal " + std::to_string(info.si_status);
+      throw std::runtime_error(scenario + ": " + c.name + " " + how + " (its output is in " + log_ + ")");
+    }
   }
   void mark() {
     for (auto& c : children_) c.cpu_at_mark = cpu_seconds(c.pid);
@@ -370,6 +384,7 @@ void run_exchange(const Config& c, bool lossy, const std::string& key, Report* r
   for (int i = 0; i < c.drones; ++i)
     procs.start("gossip" + std::to_string(i), gossip_args(c, i, lossy ? drone_url(i) : kSwarmUrl, key, true));
   obs.spin(2.0);  // start-up and settle (1.5 s)
+  procs.require_running(name);
 
   std::vector<int64_t> t_inject(static_cast<size_t>(c.rounds));
   const int64_t t0 = now_us();
@@ -394,6 +409,7 @@ void run_exchange(const Config& c, bool lossy, const std::string& key, Report* r
   };
   const bool complete = obs.wait_for(all_complete, 10);
   obs.spin(1.1);  // the last status messages
+  procs.require_running(name);
   std::vector<Child> done = procs.stop_all();
 
   // Latency per round: every drone holding it.
@@ -494,6 +510,7 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
     procs.start("solver" + id, {c.solver_bin, "--drone-id", id, "--lcm-url", kSwarmUrl});
   }
   obs.spin(1.0);
+  procs.require_running(name);
   // Drone i at (3 cos(2πi/N), 3 sin(2πi/N)), each spinning at 2π per period; its odometry frame is
   // the world turned by 0.3 i (the frames differ, as they do).
   const int n = c.drones;
@@ -556,6 +573,7 @@ void run_spin(const Config& c, const std::string& key, Report* report) {
   procs.measure();
   const double window = 1e-6 * static_cast<double>(end - warm);
   obs.spin(1.1);
+  procs.require_running(name);
   std::vector<Child> done = procs.stop_all();
   // Per drone, % of one core over the window: relay, gossip, solver, and the chain's sum.
   std::map<std::string, std::vector<double>> cpu_of;  // kind → per drone
@@ -640,31 +658,36 @@ int main(int argc, char** argv) {
   Config c;
   CLI::App cli{"fact-bench-gossip: latency, loss tolerance, bandwidth and CPU of fact-gossip processes over udpm. "
                "Run inside a private network namespace: scripts/netns-run.sh fact-bench-gossip"};
-  cli.add_option("--drones", c.drones, "Swarm size")->capture_default_str()->check(CLI::Range(2, 30));
-  cli.add_option("--rounds", c.rounds, "Rounds per exchange scenario")->capture_default_str()->check(CLI::Range(1, 100));
+  cli.add_option("--drones", c.drones, "Swarm size")->capture_default_str()->check(fact::app::decimal_integer())
+      ->check(CLI::Range(2, 30));
+  cli.add_option("--rounds", c.rounds, "Rounds per exchange scenario")->capture_default_str()
+      ->check(fact::app::decimal_integer())->check(CLI::Range(1, 100));
   cli.add_option("--period", c.period, "s between rounds (spin period)")->capture_default_str()->check(CLI::Range(0.2, 60.0));
-  cli.add_option("--observations", c.observations, "Observations per injected round packet")->capture_default_str();
-  cli.add_option("--drop", c.drop, "Loss probability (lossy scenario)")->capture_default_str();
-  cli.add_option("--dup", c.dup, "Duplication probability (lossy scenario)")->capture_default_str();
-  cli.add_option("--reorder", c.reorder, "Hold-back probability (lossy scenario)")->capture_default_str();
-  cli.add_option("--spin-seconds", c.spin_seconds, "Length of the spin scenario (s)")->capture_default_str();
-  cli.add_option("--odometry-hz", c.odometry_hz, "Odometry and detection rate in the spin scenario")->capture_default_str();
+  // (fact-gossip takes at most 64 observations a packet; a rate of 0 Hz hung the spin scenario)
+  cli.add_option("--observations", c.observations, "Observations per injected round packet")->capture_default_str()
+      ->check(fact::app::decimal_integer())->check(CLI::Range(1, 64));
+  cli.add_option("--drop", c.drop, "Loss probability (lossy scenario)")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cli.add_option("--dup", c.dup, "Duplication probability (lossy scenario)")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cli.add_option("--reorder", c.reorder, "Hold-back probability (lossy scenario)")->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  cli.add_option("--spin-seconds", c.spin_seconds, "Length of the spin scenario (s)")->capture_default_str()->check(CLI::Range(2.0, 3600.0));
+  cli.add_option("--odometry-hz", c.odometry_hz, "Odometry and detection rate in the spin scenario")->capture_default_str()->check(CLI::Range(1.0, 200.0));
   cli.add_option("--out", c.out, "CSV to write")->capture_default_str();
   cli.add_option("--gossip-bin", c.gossip_bin, "fact-gossip executable")->capture_default_str();
   cli.add_option("--relay-bin", c.relay_bin, "fact-fault-relay executable")->capture_default_str();
   cli.add_option("--vio-relay-bin", c.vio_relay_bin, "fact-vio-relay executable (spin scenario)")->capture_default_str();
   cli.add_option("--solver-bin", c.solver_bin, "fact-solver executable (spin scenario)")->capture_default_str();
   cli.add_option("--log", c.log, "Where the processes' log lines go")->capture_default_str();
-  cli.add_flag("--quick", c.quick, "3 rounds every 1.5 s, 8 s of spin scenario");
+  cli.add_flag("--quick", c.quick, "3 rounds every 1.5 s, 8 s of spin scenario (where --rounds, --period or --spin-seconds do not say)");
+  fact::app::refuse_empty_values(cli);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.exit(e) == 0 ? 0 : 2;
   }
-  if (c.quick) {
-    c.rounds = 3;
-    c.period = 1.5;
-    c.spin_seconds = 8;
+  if (c.quick) {  // a flag given explicitly wins, in whatever order
+    if (cli.count("--rounds") == 0) c.rounds = 3;
+    if (cli.count("--period") == 0) c.period = 1.5;
+    if (cli.count("--spin-seconds") == 0) c.spin_seconds = 8;
   }
   const std::string nets = network_interfaces();
   if (nets != "lo") {
@@ -690,11 +713,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::remove(key.c_str());
-  std::ofstream out(c.out);
-  if (!out) {
-    std::cerr << "fact-bench-gossip: cannot write " << c.out << "\n";
-    return 1;
-  }
+  std::ostringstream out;  // written whole below (results_file.h)
   out << "scenario,metric,value,unit,target\n";
   for (const Row& r : report.rows) {
     char v[64];
@@ -703,6 +722,12 @@ int main(int argc, char** argv) {
     if (r.metric.rfind("latency_round_", 0) == 0) continue;
     std::printf("%-6s %-38s %12s %-16s %s\n", r.scenario.c_str(), r.metric.c_str(), v, r.unit.c_str(),
                 r.target.empty() ? "" : ("target " + r.target).c_str());
+  }
+  try {
+    fact::bench::write_results_file(c.out, out.str());
+  } catch (const std::exception& e) {
+    std::cerr << "fact-bench-gossip: " << e.what() << "\n";
+    return 1;
   }
   std::printf("written: %s (process logs: %s)\n", c.out.c_str(), c.log.c_str());
   return 0;

@@ -49,6 +49,37 @@ void check_problem(const Eigen::MatrixXd& c, int d) {
 // The symmetric part's (i, j) entry: what ⟨C, X⟩ sees for a symmetric X.
 double sym(const Eigen::MatrixXd& c, int i, int j) { return 0.5 * (c(i, j) + c(j, i)); }
 
+// Runs its scope in an empty directory of its own (made once per process, removed at exit), and
+// returns to the caller's working directory after: CSDP's easy_sdp reads a "param.csdp" from the
+// working directory when there is one, so a stray file there (maxiter=3, say) changed the peer's
+// answers (review, session 34).
+class InEmptyDirectory {
+ public:
+  InEmptyDirectory() {
+    static const std::string dir = make_empty_directory();
+    saved_ = open(".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (saved_ < 0 || chdir(dir.c_str()) != 0)
+      throw std::runtime_error("peers: cannot enter the empty directory " + dir + " for CSDP");
+  }
+  ~InEmptyDirectory() {
+    if (fchdir(saved_) != 0) std::perror("peers: cannot return to the working directory");
+    close(saved_);
+  }
+  InEmptyDirectory(const InEmptyDirectory&) = delete;
+  InEmptyDirectory& operator=(const InEmptyDirectory&) = delete;
+
+ private:
+  static std::string make_empty_directory() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "fact-csdp-cwd-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("peers: mkdtemp " + pattern + " failed");
+    static std::string made;
+    made = pattern;
+    std::atexit([] { rmdir(made.c_str()); });
+    return pattern;
+  }
+  int saved_ = -1;
+};
+
 // Redirects the process's stdout (fd 1) to /dev/null for its lifetime: CSDP's easy_sdp
 // prints its iteration log with printf unless a param.csdp says printlevel=0, and SDPA
 // prints some warnings ("Strange behavior : primal < dual") even without a display.
@@ -304,6 +335,7 @@ PeerResult solve_csdp(const Eigen::MatrixXd& C, int d) {
   const int n = static_cast<int>(C.rows());
   const std::vector<BlockConstraint> cons = block_constraints(n, d);
   const int m = static_cast<int>(cons.size());
+  InEmptyDirectory no_param_file;  // outside the timed part
   const Clock::time_point start = Clock::now();
   blockmatrix objective = csdp_objective(C);
   double* rhs = c_alloc<double>(m + 1);  // a_k, 1-based

@@ -37,6 +37,8 @@
 #include "fact/planner.h"
 #include "fact/sim_render.h"
 #include "fact/sim_world.h"
+#include "common/cli_checks.h"
+#include "results_file.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -128,27 +130,32 @@ struct EpisodeResult {
 int main(int argc, char** argv) {
   Options o;
   CLI::App cli{"fact-bench-planner: safety of the planner in randomized simulated planning episodes"};
-  cli.add_option("--episodes", o.episodes, "Episodes (4-8 drones each)")->capture_default_str();
-  cli.add_option("--seed", o.seed, "Seed of the worlds, statuses and noise")->capture_default_str();
-  cli.add_option("--frames", o.frames, "Frames per spin (424x240) for each drone's map")->capture_default_str();
-  cli.add_option("--min-pixels", o.min_pixels, "Visible pixels for a drone to count as detected")->capture_default_str();
+  cli.add_option("--episodes", o.episodes, "Episodes (4-8 drones each)")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  cli.add_option("--seed", o.seed, "Seed of the worlds, statuses and noise")->capture_default_str()
+      ->check(fact::app::uint64_text());
+  cli.add_option("--frames", o.frames, "Frames per spin (424x240) for each drone's map")->capture_default_str()
+      ->check(fact::app::decimal_integer());
+  cli.add_option("--min-pixels", o.min_pixels, "Visible pixels for a drone to count as detected")->capture_default_str()
+      ->check(fact::app::decimal_integer());
   cli.add_option("--detect-range", o.detect_range, "m, farther drones are not detected")->capture_default_str();
   cli.add_option("--range-noise", o.range_noise, "Detection range noise, fraction of the range (1 sigma)")->capture_default_str();
   cli.add_option("--bearing-noise", o.bearing_noise, "Detection bearing noise, rad (1 sigma)")->capture_default_str();
   cli.add_option("--dt", o.dt, "s, time step of the synchronised flight check")->capture_default_str();
   cli.add_option("--out-dir", o.out_dir, "Where planner.csv and planner_summary.txt go")->capture_default_str();
-  cli.add_option("--first-episode", o.first_episode, "Index of the first episode (to rerun one)")->capture_default_str();
+  // (a negative index ran episodes of 3 … 0 drones: n = 4 + ep % 5)
+  cli.add_option("--first-episode", o.first_episode, "Index of the first episode (to rerun one; the CSV's episode column)")
+      ->capture_default_str()->check(fact::app::decimal_integer())->check(CLI::Range(0, 1 << 30));
   cli.add_flag("--verbose", o.verbose, "Print every drone's pose, detections and plan");
   bool quick = false;
   cli.add_flag("--quick", quick, "50 episodes (a smoke run)");
+  fact::app::refuse_empty_values(cli);
   CLI11_PARSE(cli, argc, argv);
   if (quick) o.episodes = 50;
   if (o.episodes < 1 || o.frames < 1 || !(o.dt > 0)) {
     std::cerr << "fact-bench-planner: --episodes, --frames must be >= 1 and --dt > 0\n";
     return 2;
   }
-  std::filesystem::create_directories(o.out_dir);
-
   const fact::PlannerParams params;
   const fact::CameraIntrinsics K = fact::d430_424x240();
   const fact::CameraExtrinsics E;
@@ -341,7 +348,7 @@ int main(int argc, char** argv) {
   }
 
   // Outputs.
-  std::ofstream csv(o.out_dir + "/planner.csv");
+  std::ostringstream csv;
   csv << "episode,drones,obstacles,status,moves,holds,fallbacks,rejected,observed,pieces,mean_move_m,"
          "min_pair_distance_m,min_pair_distance_move_m,min_obstacle_distance_m,min_wall_distance_m,separation_violations,"
          "obstacle_violations,room_violations\n";
@@ -351,7 +358,9 @@ int main(int argc, char** argv) {
   for (size_t e = 0; e < results.size(); ++e) {
     const EpisodeResult& r = results[e];
     char buf[512];
-    std::snprintf(buf, sizeof buf, "%zu,%d,%d,%s,%d,%d,%d,%d,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d\n", e, r.drones, r.obstacles,
+    // episode: the index the run used (--first-episode + e), which reruns it alone
+    std::snprintf(buf, sizeof buf, "%d,%d,%d,%s,%d,%d,%d,%d,%d,%d,%.3f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d\n",
+                  o.first_episode + static_cast<int>(e), r.drones, r.obstacles,
                   fact::to_string(r.status), r.moves, r.holds, r.fallbacks, r.rejected, r.observed_total, r.pieces_total,
                   r.mean_move, r.min_pair, r.min_pair_move, r.min_obstacle, r.min_wall, r.sep_violations, r.obstacle_violations,
                   r.room_violations);
@@ -407,7 +416,13 @@ int main(int argc, char** argv) {
   std::snprintf(line, sizeof line, "renderer (context): median %.2f ms per frame; total %.1f s\n", percentile(render_ms, 0.5),
                 ms_since(t_start) / 1000);
   s << line;
-  std::ofstream(o.out_dir + "/planner_summary.txt") << s.str();
+  try {
+    fact::bench::write_results_file(o.out_dir + "/planner.csv", csv.str());
+    fact::bench::write_results_file(o.out_dir + "/planner_summary.txt", s.str());
+  } catch (const std::exception& e) {
+    std::cerr << "fact-bench-planner: " << e.what() << "\n";
+    return 1;
+  }
   std::cout << s.str();
   std::cout << "wrote " << o.out_dir << "/planner.csv and " << o.out_dir << "/planner_summary.txt\n";
   return (sep + obst + room) == 0 ? 0 : 3;

@@ -21,6 +21,7 @@
 #include "fact/sdp.h"
 #include "instances.h"
 #include "peers.h"
+#include "results_file.h"
 
 namespace {
 
@@ -43,6 +44,7 @@ struct Args {
   int reps = 3;
   int peer_max_n = 100;
   bool peers = true;
+  bool quick = false;  // --quick: max_n at most 16, applied after all flags
   std::string out = "bench/results/sdp.csv";
 };
 
@@ -75,13 +77,14 @@ bool parse_args(int argc, char** argv, Args* args) {
     };
     if (flag == "--help" || flag == "-h") return false;
     if (flag == "--max-n") args->max_n = parse_int(flag, value(), 2);
-    else if (flag == "--quick") args->max_n = std::min(args->max_n, 16);
+    else if (flag == "--quick") args->quick = true;
     else if (flag == "--reps") args->reps = parse_int(flag, value(), 1);
     else if (flag == "--out") args->out = value();
     else if (flag == "--no-peers") args->peers = false;
     else if (flag == "--peer-max-n") args->peer_max_n = parse_int(flag, value(), 0);
     else throw std::invalid_argument("unknown flag '" + flag + "'");
   }
+  if (args->quick) args->max_n = std::min(args->max_n, 16);  // whatever the flags' order
   return true;
 }
 
@@ -279,15 +282,6 @@ void print_summary(const std::vector<Row>& rows) {
   }
 }
 
-std::ofstream open_csv(const std::string& path) {
-  const std::filesystem::path p(path);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-  std::ofstream csv(path);
-  if (!csv) throw std::runtime_error("cannot write " + path);
-  csv << kCsvHeader << "\n";
-  return csv;
-}
-
 void print_environment(const Args& args) {
   const char* blas_threads = std::getenv("OPENBLAS_NUM_THREADS");
   std::printf("fact-bench-sdp: reps %d, peers %s (SDPA %s, CSDP %s), peers up to N = %d, OPENBLAS_NUM_THREADS=%s\n",
@@ -303,7 +297,7 @@ int run(const Args& args) {
   std::vector<int> sizes;
   for (int n : kSizes)
     if (n <= args.max_n) sizes.push_back(n);
-  std::ofstream csv = open_csv(args.out);
+  std::string csv = std::string(kCsvHeader) + "\n";  // written whole at the end (results_file.h)
   print_environment(args);
   warm_up(args.peers);
   print_table_header();
@@ -315,9 +309,10 @@ int run(const Args& args) {
       rows.push_back(run_one(drones, name, args));
       clear_progress();
       print_row(rows.back());
-      csv << csv_line(rows.back()) << "\n" << std::flush;
+      csv += csv_line(rows.back()) + "\n";
     }
   print_summary(rows);
+  fact::bench::write_results_file(args.out, csv);
   std::printf("\nwrote %s\n", args.out.c_str());
   return 0;
 }

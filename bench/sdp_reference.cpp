@@ -6,7 +6,8 @@
 //     name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective
 // n is the matrix dimension (C is n×n, n = d·N); objectives are ⟨C, X⟩ in OUR minimisation
 // sign, %.12e (the csdp binary prints only 8 significant digits).
-// Exits 1 when the three routes disagree by more than 1e-6 relative, or one gives no value.
+// Exits 1 when the three routes disagree by more than 1e-6 relative, or one gives no value, and
+// then leaves <out-dir> as it was (the files are staged and replaced only when all agree).
 #include <unistd.h>
 
 #include <algorithm>
@@ -15,13 +16,16 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "instances.h"
 #include "peers.h"
+#include "results_file.h"
 
 namespace {
 
@@ -86,36 +90,63 @@ std::string usage() {
          "  writes DIR/<name>.dat-s and DIR/optima.csv (default DIR: test/data/sdp)\n";
 }
 
-// Returns 0 when all instances agree, 1 otherwise.
+// The three routes' values as the CSV row, %.12e.
+std::string csv_row(const RefInstance& inst, const Optima& o) {
+  char row[256];
+  std::snprintf(row, sizeof row, "%s,%d,%d,%.12e,%.12e,%.12e\n", inst.name.c_str(), static_cast<int>(inst.C.rows()),
+                inst.d, o.sdpa.objective, o.csdp.objective, o.binary.objective);
+  return row;
+}
+
+std::string read_whole(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) throw std::runtime_error("cannot read back " + path.string());
+  return text.str();
+}
+
+// Solves every instance with its .dat-s written to a staging directory, and only when all of them
+// agree copies the .dat-s files and optima.csv into out_dir, each replaced atomically: a run that
+// disagrees leaves out_dir as it was (it used to rewrite the files first and exit 1 after, leaving
+// the disagreeing values for test_sdp to read; review, session 34). Returns 0 when all instances
+// agree, 1 otherwise.
 int run(const std::string& out_dir) {
-  std::filesystem::create_directories(out_dir);
   const std::filesystem::path workdir =
       std::filesystem::temp_directory_path() / ("fact-sdp-reference-" + std::to_string(getpid()));
-  std::filesystem::create_directories(workdir);
-  const std::string csv_path = (std::filesystem::path(out_dir) / "optima.csv").string();
-  std::FILE* csv = std::fopen(csv_path.c_str(), "w");
-  if (csv == nullptr) throw std::runtime_error("cannot write " + csv_path);
-  std::fprintf(csv, "name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective\n");
+  const std::filesystem::path stage = workdir / "stage";
+  std::filesystem::create_directories(stage);
+  std::string csv = "name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective\n";
+  std::vector<std::string> names;
   std::printf("%-22s %4s %2s %20s %20s %20s %9s\n", "name", "n", "d", "sdpa", "csdp", "csdp binary", "max diff");
   int failures = 0;
   for (const RefInstance& inst : reference_instances()) {
-    const std::string dat = (std::filesystem::path(out_dir) / (inst.name + ".dat-s")).string();
+    const std::string dat = (stage / (inst.name + ".dat-s")).string();
     fact::bench::write_sdpa_sparse(dat, inst.C, inst.d);
+    names.push_back(inst.name + ".dat-s");
     const Optima o = solve_all(inst, dat, workdir.string());
     const double diff = disagreement(o);
     const bool ok = diff <= kAgreementTol;  // false for NaN
     failures += ok ? 0 : 1;
-    std::fprintf(csv, "%s,%d,%d,%.12e,%.12e,%.12e\n", inst.name.c_str(), static_cast<int>(inst.C.rows()), inst.d,
-                 o.sdpa.objective, o.csdp.objective, o.binary.objective);
+    csv += csv_row(inst, o);
     std::printf("%-22s %4d %2d %20.12e %20.12e %20.12e %9.1e%s%s\n", inst.name.c_str(),
                 static_cast<int>(inst.C.rows()), inst.d, o.sdpa.objective, o.csdp.objective, o.binary.objective, diff,
                 ok ? "" : "  DISAGREE", warnings(o).c_str());
   }
-  std::fclose(csv);
+  const std::filesystem::path csv_path = std::filesystem::path(out_dir) / "optima.csv";
+  if (failures == 0) {
+    for (const std::string& name : names)
+      fact::bench::write_results_file((std::filesystem::path(out_dir) / name).string(), read_whole(stage / name));
+    fact::bench::write_results_file(csv_path.string(), csv);
+  }
   std::filesystem::remove_all(workdir);
+  if (failures) {
+    std::printf("%d instance(s) disagree by more than %.0e: %s and its .dat-s files left as they were\n", failures,
+                kAgreementTol, csv_path.c_str());
+    return 1;
+  }
   std::printf("wrote %s and the .dat-s files beside it\n", csv_path.c_str());
-  if (failures) std::printf("%d instance(s) disagree by more than %.0e\n", failures, kAgreementTol);
-  return failures ? 1 : 0;
+  return 0;
 }
 
 }  // namespace

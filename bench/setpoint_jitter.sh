@@ -35,7 +35,9 @@ lcm-logger --lcm-url "$url" --channel 'FACT_SETPOINT_0' "$work/setpoints.lcmlog"
 pids+=($logger)
 sleep "$seconds"
 kill -INT "$logger"; wait "$logger" 2>/dev/null || true
-/usr/bin/python3 - "$work/setpoints.lcmlog" "$seconds" <<'PY' | tee "$here/results/setpoint_jitter.txt"
+# The figures go to $work first and replace the results file only when they were computed (a run
+# that recorded nothing used to empty it through tee).
+/usr/bin/python3 - "$work/setpoints.lcmlog" "$seconds" >"$work/jitter.txt" <<'PY'
 import struct, sys, statistics, os, datetime
 data = open(sys.argv[1], "rb").read()
 times, pos = [], 0
@@ -53,3 +55,7 @@ print("setpoints %d, rate %.2f Hz (target >= 20)" % (len(times), rate))
 print("interval ms: median %.2f, min %.2f, max %.2f" % (statistics.median(iv), min(iv), max(iv)))
 print("jitter ms (|interval - %.2f|): median %.3f, p99 %.3f, max %.3f (target <= 5)" % (nominal, statistics.median(jit), jit[min(len(jit) - 1, int(0.99 * len(jit)))], jit[-1]))
 PY
+cat "$work/jitter.txt"
+mkdir -p "$here/results"
+cp "$work/jitter.txt" "$here/results/setpoint_jitter.txt.partial" &&
+  mv "$here/results/setpoint_jitter.txt.partial" "$here/results/setpoint_jitter.txt"

@@ -5,7 +5,9 @@
 #   bench_args BINARY ARGS...  with --help/-h among ARGS, shows BINARY's help and exits; sets
 #                              out_dir to the --out-dir among ARGS (default bench/results)
 here="$(cd "$(dirname "${BASH_SOURCE[1]}")/.." && pwd)"
-build="${BUILD_DIR:-$here/build}"
+# (absolute: the scripts cd to the repository before they run the binary, so a relative BUILD_DIR
+# was built under the caller's folder and then looked for under the repository)
+build="$(realpath -m "${BUILD_DIR:-$here/build}")"
 
 bench_build() {
   "$here/scripts/install-deps.sh"
