@@ -9,6 +9,11 @@
 //               each pair a relative-pose hypothesis verified against the detections both drones
 //               share, then certified rotation synchronisation and least-squares translation.
 //   automatic   associated, then complex, then paper: the first that certifies.
+// The summed data know less than the detections they add up: paper and complex never certify when
+// the association leaves a drone unresolved with a pair that several poses explain about equally
+// well (a symmetric formation, where noise alone picks the summed SDP's optimum). In automatic mode
+// they are then not tried; explicit paper and complex run the association to check (stage
+// "rival_check" of timing_us).
 #pragma once
 
 #include "fact/rounds.h"
@@ -32,9 +37,9 @@ enum class EstimateStatus {
 };
 const char* to_string(EstimateStatus s);  // "certified", "ambiguous", "invalid_input"
 
-// The sensor's noise. A detected centre at range d, seen a rounds before the latest round used,
-// has covariance σ_along² along the ray and σ_across² across it (both axes), in the observer's
-// frame:
+// The sensor's noise. A detected centre at range d, seen a rounds before the latest round used (by
+// round index: missing rounds count too), has covariance σ_along² along the ray and σ_across²
+// across it (both axes), in the observer's frame:
 //   σ_along²  = floor² + (linear·d + quadratic·d²)² + odom(a)²
 //   σ_across² = floor² + (bearing·d)² + odom(a)² + (odom_yaw(a)·d)²
 //   odom(a)²     = odometry²     + a·odometry_walk²       (VIO position error, m²)
