@@ -8,12 +8,13 @@
 //   associated  yaw-invariant association of mutual pairs (|v_ij| ≈ |v_ji|, v_ij,z ≈ −v_ji,z),
 //               each pair a relative-pose hypothesis verified against the detections both drones
 //               share, then certified rotation synchronisation and least-squares translation.
-//   automatic   associated, then complex, then paper: the first that certifies.
+//   automatic   associated, then complex, then paper: the first that certifies (the summed modes
+//               are not tried when the association finds an ambiguous drone, below).
 // The summed data know less than the detections they add up: paper and complex never certify when
 // the association leaves a drone unresolved with a pair that several poses explain about equally
-// well (a symmetric formation, where noise alone picks the summed SDP's optimum). In automatic mode
-// they are then not tried; explicit paper and complex run the association to check (stage
-// "rival_check" of timing_us).
+// well (a symmetric formation, where noise alone picks the summed SDP's optimum), nor poses that
+// contradict the association's certified ones. In automatic mode they are then not tried; explicit
+// paper and complex run the association to check (stage "rival_check" of timing_us).
 #pragma once
 
 #include "fact/rounds.h"
@@ -31,7 +32,8 @@ const char* to_string(Mode m);         // "paper", "complex", "associated", "aut
 bool parse_mode(const std::string& text, Mode* mode);  // accepts the names above
 
 enum class EstimateStatus {
-  certified,      // globally optimal, unique, every drone resolved and consistent
+  certified,      // globally optimal, unique, every drone resolved and consistent (summed modes:
+                  // and the association finds no rival, see above)
   ambiguous,      // too few rounds, disconnected graph, symmetric formation, … (reason says which)
   invalid_input,  // reason names the round, the drone, the field and the value
 };
