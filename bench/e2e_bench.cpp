@@ -407,8 +407,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (o.work_dir.empty()) o.work_dir = o.out_dir + "/e2e-runs";
-  fs::create_directories(o.out_dir);
-  fs::create_directories(o.work_dir);
+  for (const auto& [flag, dir] : {std::pair<const char*, std::string>{"--out-dir", o.out_dir}, {"--work-dir", o.work_dir}}) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (!fs::is_directory(dir)) {
+      std::cerr << "fact-bench-e2e: error: " << flag << ": cannot make the folder " << dir
+                << (ec ? ": " + ec.message() : std::string()) << "\n";
+      return 1;
+    }
+  }
 
   // e2e_runs.csv is rewritten whole after every run: what finished is kept, an old file is never
   // left half-written.

@@ -111,10 +111,35 @@ std::string read_whole(const std::filesystem::path& path) {
 // disagrees leaves out_dir as it was (it used to rewrite the files first and exit 1 after, leaving
 // the disagreeing values for test_sdp to read; review, session 34). Returns 0 when all instances
 // agree, 1 otherwise.
+// Removes the staging folder however run() ends (a throw left it in /tmp).
+struct RemovedAtEnd {
+  std::filesystem::path path;
+  ~RemovedAtEnd() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+// "" when every file run() writes can be replaced in out_dir (a folder, made if missing, whose
+// targets are not folders), else why not: checked before the solves, so that a failure cannot
+// come after some .dat-s files were replaced and leave them beside the old optima.csv.
+std::string output_problem(const std::filesystem::path& out_dir, const std::vector<std::string>& names) {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (!std::filesystem::is_directory(out_dir)) return "--out-dir: " + out_dir.string() + " is not a folder";
+  if (access(out_dir.c_str(), W_OK) != 0) return "--out-dir: " + out_dir.string() + " is not writable";
+  for (const std::string& name : names)
+    if (std::filesystem::is_directory(out_dir / name)) return "--out-dir: " + (out_dir / name).string() + " is a folder";
+  return "";
+}
+
 int run(const std::string& out_dir) {
-  const std::filesystem::path workdir =
-      std::filesystem::temp_directory_path() / ("fact-sdp-reference-" + std::to_string(getpid()));
-  const std::filesystem::path stage = workdir / "stage";
+  std::vector<std::string> outputs{"optima.csv"};
+  for (const RefInstance& inst : reference_instances()) outputs.push_back(inst.name + ".dat-s");
+  if (const std::string e = output_problem(out_dir, outputs); !e.empty()) throw std::runtime_error(e);
+  const RemovedAtEnd workdir{std::filesystem::temp_directory_path() /
+                             ("fact-sdp-reference-" + std::to_string(getpid()))};
+  const std::filesystem::path stage = workdir.path / "stage";
   std::filesystem::create_directories(stage);
   std::string csv = "name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective\n";
   std::vector<std::string> names;
@@ -124,7 +149,7 @@ int run(const std::string& out_dir) {
     const std::string dat = (stage / (inst.name + ".dat-s")).string();
     fact::bench::write_sdpa_sparse(dat, inst.C, inst.d);
     names.push_back(inst.name + ".dat-s");
-    const Optima o = solve_all(inst, dat, workdir.string());
+    const Optima o = solve_all(inst, dat, workdir.path.string());
     const double diff = disagreement(o);
     const bool ok = diff <= kAgreementTol;  // false for NaN
     failures += ok ? 0 : 1;
@@ -139,7 +164,6 @@ int run(const std::string& out_dir) {
       fact::bench::write_results_file((std::filesystem::path(out_dir) / name).string(), read_whole(stage / name));
     fact::bench::write_results_file(csv_path.string(), csv);
   }
-  std::filesystem::remove_all(workdir);
   if (failures) {
     std::printf("%d instance(s) disagree by more than %.0e: %s and its .dat-s files left as they were\n", failures,
                 kAgreementTol, csv_path.c_str());
