@@ -90,9 +90,9 @@ Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel
   const int64_t latest = rounds.rounds.empty() ? 0 : rounds.rounds.back().index;
   for (const Round& round : rounds.rounds) {
     // Rounds before the latest, by index: the rounds missing between them (a rounds file edited,
-    // merged or cut by hand; fact-solver's rounds from the gossip have none) drifted too. It was counted by position in the list, so
-    // rounds 0, 1, 29 weighed as 0, 1, 2 and the drift of the 27 missing rounds was not modelled:
-    // wrong results certified (review, session 34). (Indexes increase strictly; capped, as an age
+    // merged or cut by hand; fact-solver's rounds from the gossip have none) drifted too. It was
+    // counted by position in the list, so rounds 0, 1, 29 weighed as 0, 1, 2 and the drift of the
+    // 27 missing rounds was not modelled: wrong results certified (review, session 34). (Indexes increase strictly; capped, as an age
     // of a million rounds already makes a detection weightless.)
     const int age = static_cast<int>(std::min<int64_t>(latest - round.index, 1000000));
     p.odometry_sd.push_back(noise.odometry_at(age));
@@ -226,12 +226,24 @@ std::string contradiction_problem(const estimator::Problem& p, const Estimate& s
   return "";
 }
 
-// Modes paper and complex: a drone of theirs stays resolved (and the result certified) only when
-// the association finds no ambiguous drone (ambiguity_problem) and agrees where both resolve a
-// drone (contradiction_problem); otherwise only the reference stays resolved. A result that is not
-// certified is checked too, since its resolved drones are claimed right (a partial result with
-// one drone too uncertain kept the other, 2.1 rad off, resolved). The check costs an association
-// (stage "rival_check"), run only when a drone besides the reference is resolved.
+// A summed-mode estimate keeps a drone resolved (and stays certified) only when the association
+// found no ambiguous drone (ambiguity_problem) and agrees where both resolve a drone
+// (contradiction_problem); otherwise only the reference stays resolved. A result that is not
+// certified is checked too, since its resolved drones are claimed right (a partial result with one
+// drone too uncertain kept the other, 2.1 rad off, resolved).
+void refuse_rivals(const estimator::Problem& p, const Estimate& associated, const std::vector<int>& ambiguous,
+                   Estimate* e) {
+  std::string why = ambiguity_problem(p, ambiguous);
+  if (why.empty()) why = contradiction_problem(p, *e, associated);
+  if (why.empty()) return;
+  e->reason = e->certified() ? why : e->reason + "; " + why;
+  e->status = EstimateStatus::ambiguous;
+  for (DronePose& d : e->drones) d.resolved = false;
+  e->drones[p.reference].resolved = true;
+}
+
+// Modes paper and complex with refuse_rivals. The check costs an association (stage
+// "rival_check"), run only when a drone besides the reference is resolved.
 Estimate summed_with_rival_check(const estimator::Problem& p, bool complex_form, const sdp::Options& o) {
   Estimate e = estimator::estimate_summed(p, complex_form, o);
   const auto resolved = [](const DronePose& d) { return d.resolved; };
@@ -240,14 +252,7 @@ Estimate summed_with_rival_check(const estimator::Problem& p, bool complex_form,
   std::vector<int> ambiguous;
   const Estimate associated = estimator::estimate_associated(p, o, &ambiguous);
   e.timing_us.emplace_back("rival_check", std::chrono::duration<double, std::micro>(Clock::now() - start).count());
-  std::string why = ambiguity_problem(p, ambiguous);
-  if (why.empty()) why = contradiction_problem(p, e, associated);
-  if (!why.empty()) {
-    e.reason = e.certified() ? why : e.reason + "; " + why;
-    e.status = EstimateStatus::ambiguous;
-    for (DronePose& d : e.drones) d.resolved = false;
-    e.drones[p.reference].resolved = true;
-  }
+  refuse_rivals(p, associated, ambiguous, &e);
   return e;
 }
 
@@ -260,7 +265,8 @@ Estimate run_mode(Mode mode, const estimator::Problem& p, const sdp::Options& o)
 }
 
 // auto: the most capable mode that certifies; if none does, the associated result. The summed
-// modes are not tried when the association found ambiguous drones (ambiguity_problem).
+// modes are not tried when the association found ambiguous drones (ambiguity_problem), and their
+// results pass refuse_rivals against the association's (partial) result.
 Estimate run_automatic(const estimator::Problem& p, const sdp::Options& o) {
   std::vector<Estimate> tried;
   std::vector<int> ambiguous;
@@ -275,8 +281,12 @@ Estimate run_automatic(const estimator::Problem& p, const sdp::Options& o) {
       tried.front().reason += "; summed modes skipped: " + ambiguity_problem(p, ambiguous);
       break;
     }
-    tried.push_back(m == Mode::associated ? estimator::estimate_associated(p, o, &ambiguous)
-                                          : estimator::estimate_summed(p, m == Mode::complex, o));
+    if (m == Mode::associated) {
+      tried.push_back(estimator::estimate_associated(p, o, &ambiguous));
+    } else {
+      tried.push_back(estimator::estimate_summed(p, m == Mode::complex, o));
+      refuse_rivals(p, tried.front(), ambiguous, &tried.back());
+    }
     if (tried.back().certified()) break;
   }
   Estimate out = tried.back().certified() ? tried.back() : tried.front();

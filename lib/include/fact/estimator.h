@@ -12,8 +12,8 @@
 //               are not tried when the association finds an ambiguous drone, below).
 // The summed data know less than the detections they add up: paper and complex never certify when
 // the association leaves a drone unresolved with a pair that several poses explain about equally
-// well (a symmetric formation, where noise alone picks the summed SDP's optimum), nor poses that
-// contradict the association's certified ones. In automatic mode they are then not tried; explicit
+// well (a symmetric formation, where noise alone picks the summed SDP's optimum; automatic mode then
+// does not try them), nor resolve poses that contradict the association's resolved ones. Explicit
 // paper and complex run the association to check (stage "rival_check" of timing_us).
 #pragma once
 

@@ -50,8 +50,10 @@ constexpr int kMaxDrones = 256;
 constexpr int kMaxObservations = 64;
 
 // Checks the data a decoder produced: ids unique and known, every number finite, 2 … kMaxDrones
-// drones, at most kMaxObservations observations per drone and round, round indexes strictly increasing (the last round is the latest). Returns "" when usable, otherwise one line naming the round, the drone, the field and
-// the value, e.g. "round 2 (index 2): drone 5: observations[1].vector[0] is nan".
+// drones, at most kMaxObservations observations per drone and round, round indexes strictly
+// increasing (the last round is the latest). Returns "" when usable, otherwise one line naming the
+// round, the drone, the field and the value, e.g. "round 2 (index 2): drone 5: observations[1].vector[0]
+// is nan".
 std::string validate_rounds(const Rounds& rounds);
 
 // The first `count` rounds (all of them when count <= 0 or count exceeds the number).
