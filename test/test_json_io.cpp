@@ -532,6 +532,58 @@ TEST(TruthJson, RoundTripIsBitExact) {
   EXPECT_NE(text.find("\"format\": \"fact-truth-v1\""), std::string::npos) << text;
 }
 
+// A drifting scenario's truth carries each round's drifted frames, so that a result (which
+// describes the latest round's drifted frames) can be checked against the file (review, session
+// 34: fact-simgen --drift-* wrote only the undrifted frames). Both or neither per drone, every
+// round alike.
+TEST(TruthJson, DriftedFramesRoundTripAndMustBeComplete) {
+  fact::SimOptions o;
+  o.drones = 3;
+  o.rounds = 3;
+  o.drift_yaw = 0.05;
+  o.drift_position = 0.1;
+  o.seed = 4;
+  const fact::Truth t = fact::generate_scenario(o).truth;
+  const std::string text = fact::truth_to_json(t);
+  const fact::Truth back = fact::truth_from_json(text);
+  ASSERT_EQ(back.drifted_yaw.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k)
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_SAME_DOUBLE(back.drifted_yaw[k][i], t.drifted_yaw[k][i]);
+      expect_same(back.drifted_origin[k][i], t.drifted_origin[k][i]);
+    }
+  EXPECT_NE(back.drifted_yaw[2][1], back.frame_yaw[1]);  // the drift is there
+  EXPECT_EQ(fact::truth_to_json(back), text);
+  const std::vector<fact::TruePose> poses = fact::true_poses_in_round(back, back.ids[0], 2);
+  const std::vector<fact::TruePose> want = fact::true_poses_in_round(t, t.ids[0], 2);
+  ASSERT_EQ(poses.size(), want.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_SAME_DOUBLE(poses[i].yaw, want[i].yaw);
+
+  const auto error = [](const std::string& s) { return error_of([&] { fact::truth_from_json(s); }); };
+  const std::size_t last = text.rfind("\"frame_yaw\"");
+  ASSERT_NE(last, std::string::npos);
+  const std::string no_yaw = text.substr(0, last) + "\"frame_yew\"" + text.substr(last + 11);
+  EXPECT_NE(error(no_yaw).find("frame_yew"), std::string::npos) << error(no_yaw);  // unknown key, named
+  fact::Truth partial = t;
+  partial.drifted_yaw.pop_back();
+  EXPECT_NE(error_of([&] { fact::truth_to_json(partial); }).find("drifted_yaw has 2 entries, expected 3"),
+            std::string::npos);
+  // The first round without them, the next with them: named where they appear.
+  fact::Truth plain = t;
+  plain.drifted_yaw.clear();
+  plain.drifted_origin.clear();
+  const std::string without = fact::truth_to_json(plain);
+  EXPECT_EQ(without.find("frame_origin\": [", without.find("\"rounds\"")), std::string::npos);
+  const std::string key = "\"position\": [";
+  const std::string round_key = "\"drones\": {";
+  const std::size_t second_round = without.find(round_key, without.find(round_key) + 1);
+  ASSERT_NE(second_round, std::string::npos) << without;
+  const std::size_t at = without.find(key, second_round);
+  const std::string mixed = without.substr(0, at) + "\"frame_yaw\": 0, \"frame_origin\": [0, 0, 0], " + without.substr(at);
+  EXPECT_NE(error(mixed).find("rounds[1]"), std::string::npos) << error(mixed);
+  EXPECT_NE(error(mixed).find("given here only"), std::string::npos) << error(mixed);
+}
+
 TEST(TruthJson, EmptyTruthRoundTrips) {
   const fact::Truth back = fact::truth_from_json(fact::truth_to_json(fact::Truth{}));
   EXPECT_TRUE(back.ids.empty());

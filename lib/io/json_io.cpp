@@ -21,6 +21,7 @@
 #include <initializer_list>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -392,7 +393,9 @@ std::vector<int> read_targets(const Json& value, const std::string& path, const 
   return targets;
 }
 
-// One round of truth: every drone's world position and targets, appended in Truth::ids order.
+// One round of truth: every drone's world position and targets, appended in Truth::ids order, and
+// its drifted frame (frame_yaw, frame_origin) when the round gives it, in truth->drifted_*; every
+// drone of every round gives it, or none does (then drifted_* stay empty).
 void read_truth_round(const Json& value, const std::string& path, Truth* truth) {
   expect_object(value, path);
   allow_only(value, path, {"drones"});
@@ -403,15 +406,33 @@ void read_truth_round(const Json& value, const std::string& path, Truth* truth) 
   check_drone_keys(drones, drones_path, ids);
   truth->positions.emplace_back();
   truth->targets.emplace_back();
+  // Whether this round's drones give their drifted frame: as the earlier rounds did, or for the
+  // first round as its first drone does.
+  std::optional<bool> drifted;
+  if (truth->positions.size() > 1) drifted = !truth->drifted_yaw.empty();
+  std::vector<double> drifted_yaw;
+  std::vector<Eigen::Vector3d> drifted_origin;
   for (int id : truth->ids) {
     const std::string drone_path = drone_member(drones_path, std::to_string(id));
     const auto it = drones.find(std::to_string(id));
     if (it == drones.end())
       fail(drone_path, "drone " + std::to_string(id) + " is missing (truth has every drone in every round)");
     expect_object(*it, drone_path);
-    allow_only(*it, drone_path, {"position", "targets"});
+    allow_only(*it, drone_path, {"position", "targets", "frame_yaw", "frame_origin"});
     truth->positions.back().push_back(vec3(need(*it, drone_path, "position"), member(drone_path, "position")));
     truth->targets.back().push_back(read_targets(need(*it, drone_path, "targets"), member(drone_path, "targets"), ids));
+    const bool has_yaw = it->contains("frame_yaw"), has_origin = it->contains("frame_origin");
+    if (!drifted) drifted = has_yaw;
+    if (has_yaw != *drifted || has_origin != *drifted)
+      fail(drone_path, std::string("frame_yaw and frame_origin (the drifted frame in this round) must be given for every "
+                                   "drone of every round or for none; ") + (*drifted ? "missing here" : "given here only"));
+    if (!*drifted) continue;
+    drifted_yaw.push_back(number((*it)["frame_yaw"], member(drone_path, "frame_yaw")));
+    drifted_origin.push_back(vec3((*it)["frame_origin"], member(drone_path, "frame_origin")));
+  }
+  if (!drifted_yaw.empty()) {
+    truth->drifted_yaw.push_back(std::move(drifted_yaw));
+    truth->drifted_origin.push_back(std::move(drifted_origin));
   }
 }
 
@@ -438,6 +459,15 @@ void check_truth_shape(const Truth& truth) {
     if (truth.positions[k].size() != n) mismatch(element("positions", k), truth.positions[k].size(), n);
     if (truth.targets[k].size() != n) mismatch(element("targets", k), truth.targets[k].size(), n);
   }
+  if (truth.drifted_yaw.empty() && truth.drifted_origin.empty()) return;  // no drifted frames: none written
+  if (truth.drifted_yaw.size() != truth.positions.size())
+    mismatch("drifted_yaw", truth.drifted_yaw.size(), truth.positions.size());
+  if (truth.drifted_origin.size() != truth.positions.size())
+    mismatch("drifted_origin", truth.drifted_origin.size(), truth.positions.size());
+  for (std::size_t k = 0; k < truth.positions.size(); ++k) {
+    if (truth.drifted_yaw[k].size() != n) mismatch(element("drifted_yaw", k), truth.drifted_yaw[k].size(), n);
+    if (truth.drifted_origin[k].size() != n) mismatch(element("drifted_origin", k), truth.drifted_origin[k].size(), n);
+  }
 }
 
 Json write_truth_round(const Truth& truth, std::size_t k, const std::string& path) {
@@ -447,6 +477,10 @@ Json write_truth_round(const Truth& truth, std::size_t k, const std::string& pat
     const std::string drone_path = drone_member(member(path, "drones"), std::to_string(truth.ids[i]));
     Json d;
     d["position"] = finite3(truth.positions[k][i], member(drone_path, "position"));
+    if (!truth.drifted_yaw.empty()) {
+      d["frame_yaw"] = finite(truth.drifted_yaw[k][i], member(drone_path, "frame_yaw"));
+      d["frame_origin"] = finite3(truth.drifted_origin[k][i], member(drone_path, "frame_origin"));
+    }
     d["targets"] = Json::array();
     for (std::size_t o = 0; o < truth.targets[k][i].size(); ++o) {
       const int target = truth.targets[k][i][o];

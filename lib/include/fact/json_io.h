@@ -48,12 +48,17 @@
 // fact-truth-v1:
 //   {"format": "fact-truth-v1",
 //    "drones": [{"id": i, "frame_yaw": r, "frame_origin": [x,y,z]}, ...],   Truth::ids order
-//    "rounds": [{"drones": {"<id>": {"position": [x,y,z], "targets": [t, ...]}}}, ...],
+//    "rounds": [{"drones": {"<id>": {"position": [x,y,z], "targets": [t, ...],
+//                                    "frame_yaw": r, "frame_origin": [x,y,z]}}}, ...],
 //    "obstacles": [{"center": [x,y,z], "radius": r, "height": h}, ...]}
 //   frame_yaw / frame_origin: the yaw and origin of the drone's odometry frame in the world.
 //   rounds[k].drones["<id>"]: that drone's world centre in round k, and for each of its
 //   observations in round k of the matching fact-rounds-v1 file (same k, same id, same order)
-//   the id it detected, or -1 for a false positive. Every round lists every drone. Obstacles
+//   the id it detected, or -1 for a false positive. Every round lists every drone. Its optional
+//   frame_yaw / frame_origin are the drone's drifted odometry frame in that round (Truth::
+//   drifted_yaw / drifted_origin, what an estimate from the rounds up to k describes: a drifting
+//   scenario's result is checked against them); given for every drone of every round or for none
+//   (files written before them have none). Obstacles
 //   are vertical cylinders standing on z = 0 (world, metres).
 #pragma once
 
