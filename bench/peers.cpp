@@ -56,13 +56,13 @@ double sym(const Eigen::MatrixXd& c, int i, int j) { return 0.5 * (c(i, j) + c(j
 class InEmptyDirectory {
  public:
   InEmptyDirectory() {
-    static std::string dir = make_empty_directory();
-    if (access(dir.c_str(), F_OK) != 0) dir = make_empty_directory();  // removed meanwhile (a /tmp cleaner)
+    static EmptyDirectory dir{make_empty_directory()};
+    if (access(dir.path.c_str(), F_OK) != 0) dir.path = make_empty_directory();  // removed meanwhile (a /tmp cleaner)
     saved_ = open(".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (saved_ < 0) throw std::runtime_error("peers: cannot open the working directory");
-    if (chdir(dir.c_str()) != 0) {
+    if (chdir(dir.path.c_str()) != 0) {
       close(saved_);  // (the destructor does not run for a constructor that throws)
-      throw std::runtime_error("peers: cannot enter the empty directory " + dir + " for CSDP");
+      throw std::runtime_error("peers: cannot enter the empty directory " + dir.path + " for CSDP");
     }
   }
   ~InEmptyDirectory() {
@@ -73,13 +73,13 @@ class InEmptyDirectory {
   InEmptyDirectory& operator=(const InEmptyDirectory&) = delete;
 
  private:
+  struct EmptyDirectory {  // removed when the process exits
+    std::string path;
+    ~EmptyDirectory() { rmdir(path.c_str()); }
+  };
   static std::string make_empty_directory() {
     std::string pattern = (std::filesystem::temp_directory_path() / "fact-csdp-cwd-XXXXXX").string();
     if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("peers: mkdtemp " + pattern + " failed");
-    static std::string made;  // the latest one, removed at exit
-    static const bool removed_at_exit = std::atexit([] { rmdir(made.c_str()); }) == 0;
-    (void)removed_at_exit;
-    made = pattern;
     return pattern;
   }
   int saved_ = -1;

@@ -106,11 +106,6 @@ std::string read_whole(const std::filesystem::path& path) {
   return text.str();
 }
 
-// Solves every instance with its .dat-s written to a staging directory, and only when all of them
-// agree copies the .dat-s files and optima.csv into out_dir, each replaced atomically: a run that
-// disagrees leaves out_dir as it was (it used to rewrite the files first and exit 1 after, leaving
-// the disagreeing values for test_sdp to read; review, session 34). Returns 0 when all instances
-// agree, 1 otherwise.
 // Removes the staging folder however run() ends (a throw left it in /tmp).
 struct RemovedAtEnd {
   std::filesystem::path path;
@@ -133,22 +128,26 @@ std::string output_problem(const std::filesystem::path& out_dir, const std::vect
   return "";
 }
 
+// Solves every instance with its .dat-s written to a staging directory, and only when all of them
+// agree copies the .dat-s files and optima.csv into out_dir, each replaced atomically: a run that
+// disagrees leaves out_dir as it was (it used to rewrite the files first and exit 1 after, leaving
+// the disagreeing values for test_sdp to read; review, session 34). Returns 0 when all instances
+// agree, 1 otherwise.
 int run(const std::string& out_dir) {
+  const std::vector<RefInstance> instances = reference_instances();
   std::vector<std::string> outputs{"optima.csv"};
-  for (const RefInstance& inst : reference_instances()) outputs.push_back(inst.name + ".dat-s");
+  for (const RefInstance& inst : instances) outputs.push_back(inst.name + ".dat-s");
   if (const std::string e = output_problem(out_dir, outputs); !e.empty()) throw std::runtime_error(e);
   const RemovedAtEnd workdir{std::filesystem::temp_directory_path() /
                              ("fact-sdp-reference-" + std::to_string(getpid()))};
   const std::filesystem::path stage = workdir.path / "stage";
   std::filesystem::create_directories(stage);
   std::string csv = "name,n,d,sdpa_objective,csdp_objective,csdp_binary_objective\n";
-  std::vector<std::string> names;
   std::printf("%-22s %4s %2s %20s %20s %20s %9s\n", "name", "n", "d", "sdpa", "csdp", "csdp binary", "max diff");
   int failures = 0;
-  for (const RefInstance& inst : reference_instances()) {
+  for (const RefInstance& inst : instances) {
     const std::string dat = (stage / (inst.name + ".dat-s")).string();
     fact::bench::write_sdpa_sparse(dat, inst.C, inst.d);
-    names.push_back(inst.name + ".dat-s");
     const Optima o = solve_all(inst, dat, workdir.path.string());
     const double diff = disagreement(o);
     const bool ok = diff <= kAgreementTol;  // false for NaN
@@ -159,16 +158,16 @@ int run(const std::string& out_dir) {
                 ok ? "" : "  DISAGREE", warnings(o).c_str());
   }
   const std::filesystem::path csv_path = std::filesystem::path(out_dir) / "optima.csv";
-  if (failures == 0) {
-    for (const std::string& name : names)
-      fact::bench::write_results_file((std::filesystem::path(out_dir) / name).string(), read_whole(stage / name));
-    fact::bench::write_results_file(csv_path.string(), csv);
-  }
   if (failures) {
     std::printf("%d instance(s) disagree by more than %.0e: %s and its .dat-s files left as they were\n", failures,
                 kAgreementTol, csv_path.c_str());
     return 1;
   }
+  for (const RefInstance& inst : instances) {
+    const std::string name = inst.name + ".dat-s";
+    fact::bench::write_results_file((std::filesystem::path(out_dir) / name).string(), read_whole(stage / name));
+  }
+  fact::bench::write_results_file(csv_path.string(), csv);  // last: beside the .dat-s it describes
   std::printf("wrote %s and the .dat-s files beside it\n", csv_path.c_str());
   return 0;
 }

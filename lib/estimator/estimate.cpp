@@ -92,8 +92,8 @@ Problem make_problem(const Rounds& rounds, int reference_index, const NoiseModel
     // Rounds before the latest, by index: the rounds missing between them (a rounds file edited,
     // merged or cut by hand; fact-solver's rounds from the gossip have none) drifted too. It was
     // counted by position in the list, so rounds 0, 1, 29 weighed as 0, 1, 2 and the drift of the
-    // 27 missing rounds was not modelled: wrong results certified (review, session 34). (Indexes increase strictly; capped, as an age
-    // of a million rounds already makes a detection weightless.)
+    // 27 missing rounds was not modelled: wrong results certified (review, session 34). (Indexes
+    // increase strictly; capped, as an age of a million rounds already makes a detection weightless.)
     const int age = static_cast<int>(std::min<int64_t>(latest - round.index, 1000000));
     p.odometry_sd.push_back(noise.odometry_at(age));
     p.odometry_yaw_sd.push_back(noise.odometry_yaw_at(age));
