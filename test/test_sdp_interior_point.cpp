@@ -15,6 +15,7 @@
 #include <utility>
 
 
+#include "complex_product.h"
 #include "internal.h"
 #include "sdp_test_costs.h"
 #include "step_length.h"
@@ -452,13 +453,13 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
 }
 
 // cholesky_in_place on both of its paths (Eigen's unblocked kernel below 128 rows, its blocked one
-// from 128), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
+// from 128; complex: from 256), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
 // negative first pivot) and for a NaN or infinite entry on the diagonal or below it.
 template <class Matrix>
 void expect_cholesky_on_every_path(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n : {1, 2, 5, 31, 32, 100, 127, 128, 140}) {
+  for (int n : {1, 2, 5, 31, 32, 100, 127, 128, 140, 255, 256}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
     const Matrix A = B * B.adjoint() + Matrix::Identity(n, n);
@@ -490,6 +491,49 @@ TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) 
   std::mt19937 rng(23);
   expect_cholesky_on_every_path<Eigen::MatrixXd>(rng);
   expect_cholesky_on_every_path<Eigen::MatrixXcd>(rng);
+}
+
+// multiply_complex against Eigen's complex product: every pair of operations (plain, adjoint),
+// assigned and accumulated, with a real factor, on blocks of larger matrices (an outer stride) and
+// on shapes below, at and above kThreeProductMinSize in each dimension (m × k times k × n). The
+// three-product form's error is normwise of the usual product's order: within 1e-14 of
+// ‖op(A)‖·‖op(B)‖ in the Frobenius norm. The entries of C outside the block stay as they were.
+TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
+  using Eigen::MatrixXcd;
+  using fact::sdp::detail::multiply_complex;
+  using fact::sdp::detail::Op;
+  constexpr Eigen::Index t = fact::sdp::detail::kThreeProductMinSize;
+  std::mt19937 rng(31);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::Index shapes[][3] = {{3, 5, 4}, {t - 1, t, t}, {t, t, t}, {t, t - 1, t}, {t, t, t - 1}, {40, 17, 23}, {64, 64, 64},
+                                    {101, 37, 90}};
+  for (const auto& [m, k, n] : shapes) {
+    for (const Op op_a : {Op::plain, Op::adjoint})
+      for (const Op op_b : {Op::plain, Op::adjoint})
+        for (const bool accumulate : {false, true}) {
+          SCOPED_TRACE(testing::Message() << m << " x " << k << " x " << n << ", op_a " << static_cast<int>(op_a)
+                                          << ", op_b " << static_cast<int>(op_b) << ", accumulate " << accumulate);
+          // A and B inside larger matrices, stored as op() expects: k × m for an adjoint A.
+          const MatrixXcd A_store = fact::test::gaussian_matrix<MatrixXcd>(m + k + 3, m + k + 3, rng, gauss);
+          const MatrixXcd B_store = fact::test::gaussian_matrix<MatrixXcd>(k + n + 3, k + n + 3, rng, gauss);
+          const auto A = op_a == Op::plain ? A_store.block(1, 2, m, k) : A_store.block(1, 2, k, m);
+          const auto B = op_b == Op::plain ? B_store.block(2, 1, k, n) : B_store.block(2, 1, n, k);
+          const MatrixXcd opA = op_a == Op::plain ? MatrixXcd(A) : MatrixXcd(A.adjoint());
+          const MatrixXcd opB = op_b == Op::plain ? MatrixXcd(B) : MatrixXcd(B.adjoint());
+          MatrixXcd C_store = fact::test::gaussian_matrix<MatrixXcd>(m + 4, n + 4, rng, gauss);
+          MatrixXcd expected = C_store;
+          const double alpha = -0.75;
+          if (accumulate) {
+            expected.block(2, 3, m, n) += alpha * opA * opB;
+          } else {
+            expected.block(2, 3, m, n) = alpha * opA * opB;
+          }
+          multiply_complex(A, op_a, B, op_b, C_store.block(2, 3, m, n), alpha, accumulate);
+          EXPECT_LT((C_store - expected).norm(), 1e-14 * opA.norm() * opB.norm());
+          C_store.block(2, 3, m, n) = expected.block(2, 3, m, n);
+          EXPECT_TRUE((C_store.array() == expected.array()).all()) << "an entry outside the block changed";
+        }
+  }
 }
 
 // The 16 × 16 tiles of for_each_entry_below_diagonal visit every entry below the diagonal exactly

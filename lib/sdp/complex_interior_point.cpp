@@ -15,6 +15,7 @@
 #include <limits>
 #include <sstream>
 
+#include "complex_product.h"
 #include "internal.h"
 #include "step_length.h"
 
@@ -150,10 +151,10 @@ double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, cons
 // point, interior_point.cpp).
 void primal_direction(const MatrixXcd& X, double sigma_mu, bool accurate, Workspace& ws, MatrixXcd& dx) {
   if (accurate) {
-    ws.PZ.noalias() = ws.P * ws.Lz_inv.adjoint();  // P Lz⁻ᴴ
-    dx.noalias() = -ws.PZ * ws.Lz_inv;              // −P Z⁻¹
+    multiply_complex(ws.P, Op::plain, ws.Lz_inv, Op::adjoint, ws.PZ, 1.0, false);  // P Lz⁻ᴴ
+    multiply_complex(ws.PZ, Op::plain, ws.Lz_inv, Op::plain, dx, -1.0, false);     // −P Z⁻¹
   } else {
-    dx.noalias() = -ws.P * ws.W;
+    multiply_complex(ws.P, Op::plain, ws.W, Op::plain, dx, -1.0, false);
   }
   dx -= X;
   if (sigma_mu != 0) dx += sigma_mu * ws.W;

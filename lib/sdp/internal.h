@@ -144,11 +144,16 @@ double damped_newton_step(Eigen::MatrixXd& H, SpdSolver& llt, const Eigen::Vecto
 // more than they save: n = 32 / 48 / 64 / 100 took 5.2 / 11.5 / 20.5 / 53 µs blocked against
 // 1.9 / 4.8 / 10.3 / 31 µs unblocked (complex), 2.5 / 5.0 / 8.7 / 22 against 0.95 / 2.3 / 4.6 /
 // 14 µs (real); below 32 Eigen itself calls the unblocked kernel, and from n = 128 blocked is as
-// fast or faster (n = 200 complex 240 against 273 µs; BENCHMARKS.md, session 29).
+// fast or faster (n = 200 complex 240 against 273 µs; BENCHMARKS.md, session 29). That was a
+// machine with AVX-512; with AVX2 (AMD EPYC) the complex blocked kernel is slower up to n = 256:
+// n = 128 / 160 / 200 / 256 took 232 / 421 / 788 / 1540 µs blocked against 168 / 330 / 602 /
+// 1512 µs unblocked, the real one faster from 128 as before (BENCHMARKS.md, session 35).
 constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
+constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
 
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
-// triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize and its blocked one from it;
+// triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize (complex:
+// kBlockedComplexCholeskyMinSize) and its blocked one from it;
 // false when A is not positive definite or its lower triangle has a NaN or infinite entry (of a
 // complex diagonal only the real part is read, as for any self-adjoint A).
 // Eigen::LLT::compute would also sum |a_ij| for a condition estimate that nothing here reads: for
@@ -157,10 +162,13 @@ constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
 template <class Matrix>
 bool cholesky_in_place(Matrix& A) {
   using Kernel = Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>;
+  const Eigen::Index blocked_from = Eigen::NumTraits<typename Matrix::Scalar>::IsComplex
+                                        ? kBlockedComplexCholeskyMinSize
+                                        : kBlockedCholeskyMinSize;
   // Eigen tests its pivots by x <= 0, which a NaN passes, and an infinite pivot has an infinite
   // root: a NaN or infinite entry read from the lower triangle ends up on L's diagonal (or, off
   // the diagonal and infinite, makes a later pivot −∞), checked here.
-  return (A.rows() < kBlockedCholeskyMinSize ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
+  return (A.rows() < blocked_from ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
          A.diagonal().real().allFinite();
 }
 

@@ -5,6 +5,7 @@
 // varying tail on their remainders.
 #include "step_length.h"
 
+#include "complex_product.h"
 #include "internal.h"
 
 #include <algorithm>
@@ -314,9 +315,15 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
   invert_lower<Scalar>(L.topLeftCorner(k, k), inverse.topLeftCorner(k, k));
   invert_lower<Scalar>(L.bottomRightCorner(m, m), inverse.bottomRightCorner(m, m));
   inverse.topRightCorner(k, m).setZero();
-  const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> BA =
-      L.bottomLeftCorner(m, k) * inverse.topLeftCorner(k, k);  // B A⁻¹, m × k
-  inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
+  if constexpr (std::is_same_v<Scalar, double>) {
+    const Eigen::MatrixXd BA = L.bottomLeftCorner(m, k) * inverse.topLeftCorner(k, k);  // B A⁻¹, m × k
+    inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
+  } else {
+    Eigen::MatrixXcd BA(m, k);  // B A⁻¹
+    multiply_complex(L.bottomLeftCorner(m, k), Op::plain, inverse.topLeftCorner(k, k), Op::plain, BA, 1.0, false);
+    multiply_complex(inverse.bottomRightCorner(m, m), Op::plain, BA, Op::plain, inverse.bottomLeftCorner(m, k), -1.0,
+                     false);
+  }
 }
 
 // Below this size W = Gᴴ G is one dense product (G lower triangular); above it the recursion.
@@ -338,8 +345,14 @@ void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen:
   const Eigen::Index k = n / 2, m = n - k;
   gram_of_lower<Scalar>(G.topLeftCorner(k, k), W.topLeftCorner(k, k));
   gram_of_lower<Scalar>(G.bottomRightCorner(m, m), W.bottomRightCorner(m, m));
-  W.topLeftCorner(k, k).noalias() += G.bottomLeftCorner(m, k).adjoint() * G.bottomLeftCorner(m, k);  // + Bᴴ B
-  W.bottomLeftCorner(m, k).noalias() = G.bottomRightCorner(m, m).adjoint() * G.bottomLeftCorner(m, k);  // Cᴴ B
+  if constexpr (std::is_same_v<Scalar, double>) {
+    W.topLeftCorner(k, k).noalias() += G.bottomLeftCorner(m, k).transpose() * G.bottomLeftCorner(m, k);  // + Bᵀ B
+    W.bottomLeftCorner(m, k).noalias() = G.bottomRightCorner(m, m).transpose() * G.bottomLeftCorner(m, k);  // Cᵀ B
+  } else {
+    const auto B = G.bottomLeftCorner(m, k);
+    multiply_complex(B, Op::adjoint, B, Op::plain, W.topLeftCorner(k, k), 1.0, true);  // + Bᴴ B
+    multiply_complex(G.bottomRightCorner(m, m), Op::adjoint, B, Op::plain, W.bottomLeftCorner(m, k), 1.0, false);  // Cᴴ B
+  }
   W.topRightCorner(k, m) = W.bottomLeftCorner(m, k).adjoint();
 }
 
