@@ -493,47 +493,46 @@ TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) 
   expect_cholesky_on_every_path<Eigen::MatrixXcd>(rng);
 }
 
-// multiply_complex against Eigen's complex product: every pair of operations (plain, adjoint),
-// assigned and accumulated, with a real factor, on blocks of larger matrices (an outer stride) and
-// on shapes below, at and above kThreeProductMinSize in each dimension (m × k times k × n). The
+// multiply_complex against Eigen's complex product: blocks and adjoints of blocks of larger matrices
+// (an outer stride) on either side, assigned and accumulated, with α = 1, −1 and −0.75, on shapes
+// below, at and above kThreeProductMinSize in each dimension (m × k times k × n). The
 // three-product form's error is normwise of the usual product's order: within 1e-14 of
-// ‖op(A)‖·‖op(B)‖ in the Frobenius norm. The entries of C outside the block stay as they were.
+// ‖L‖·‖R‖ in the Frobenius norm. The entries of C outside the block stay as they were.
 TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
   using Eigen::MatrixXcd;
-  using fact::sdp::detail::multiply_complex;
-  using fact::sdp::detail::Op;
   constexpr Eigen::Index t = fact::sdp::detail::kThreeProductMinSize;
   std::mt19937 rng(31);
   std::normal_distribution<double> gauss(0.0, 1.0);
+  // L, R: the operands as multiply_complex gets them; C_store holds the m × n block C.
+  auto check = [&](const auto& L, const auto& R, double alpha, bool accumulate) {
+    const Eigen::Index m = L.rows(), n = R.cols();
+    const MatrixXcd l = L, r = R;
+    MatrixXcd C_store = fact::test::gaussian_matrix<MatrixXcd>(m + 4, n + 4, rng, gauss);
+    MatrixXcd expected = C_store;
+    if (accumulate) {
+      expected.block(2, 3, m, n) += alpha * l * r;
+    } else {
+      expected.block(2, 3, m, n) = alpha * l * r;
+    }
+    fact::sdp::detail::multiply_complex(L, R, C_store.block(2, 3, m, n), alpha, accumulate);
+    EXPECT_LT((C_store - expected).norm(), 1e-14 * l.norm() * r.norm());
+    C_store.block(2, 3, m, n) = expected.block(2, 3, m, n);
+    EXPECT_TRUE((C_store.array() == expected.array()).all()) << "an entry outside the block changed";
+  };
   const Eigen::Index shapes[][3] = {{3, 5, 4}, {t - 1, t, t}, {t, t, t}, {t, t - 1, t}, {t, t, t - 1}, {40, 17, 23}, {64, 64, 64},
                                     {101, 37, 90}};
-  for (const auto& [m, k, n] : shapes) {
-    for (const Op op_a : {Op::plain, Op::adjoint})
-      for (const Op op_b : {Op::plain, Op::adjoint})
-        for (const bool accumulate : {false, true}) {
-          SCOPED_TRACE(testing::Message() << m << " x " << k << " x " << n << ", op_a " << static_cast<int>(op_a)
-                                          << ", op_b " << static_cast<int>(op_b) << ", accumulate " << accumulate);
-          // A and B inside larger matrices, stored as op() expects: k × m for an adjoint A.
-          const MatrixXcd A_store = fact::test::gaussian_matrix<MatrixXcd>(m + k + 3, m + k + 3, rng, gauss);
-          const MatrixXcd B_store = fact::test::gaussian_matrix<MatrixXcd>(k + n + 3, k + n + 3, rng, gauss);
-          const auto A = op_a == Op::plain ? A_store.block(1, 2, m, k) : A_store.block(1, 2, k, m);
-          const auto B = op_b == Op::plain ? B_store.block(2, 1, k, n) : B_store.block(2, 1, n, k);
-          const MatrixXcd opA = op_a == Op::plain ? MatrixXcd(A) : MatrixXcd(A.adjoint());
-          const MatrixXcd opB = op_b == Op::plain ? MatrixXcd(B) : MatrixXcd(B.adjoint());
-          MatrixXcd C_store = fact::test::gaussian_matrix<MatrixXcd>(m + 4, n + 4, rng, gauss);
-          MatrixXcd expected = C_store;
-          const double alpha = -0.75;
-          if (accumulate) {
-            expected.block(2, 3, m, n) += alpha * opA * opB;
-          } else {
-            expected.block(2, 3, m, n) = alpha * opA * opB;
-          }
-          multiply_complex(A, op_a, B, op_b, C_store.block(2, 3, m, n), alpha, accumulate);
-          EXPECT_LT((C_store - expected).norm(), 1e-14 * opA.norm() * opB.norm());
-          C_store.block(2, 3, m, n) = expected.block(2, 3, m, n);
-          EXPECT_TRUE((C_store.array() == expected.array()).all()) << "an entry outside the block changed";
-        }
-  }
+  for (const auto& [m, k, n] : shapes)
+    for (const double alpha : {1.0, -1.0, -0.75})
+      for (const bool accumulate : {false, true}) {
+        SCOPED_TRACE(testing::Message() << m << " x " << k << " x " << n << ", alpha " << alpha << ", accumulate "
+                                        << accumulate);
+        const MatrixXcd A = fact::test::gaussian_matrix<MatrixXcd>(m + k + 3, m + k + 3, rng, gauss);
+        const MatrixXcd B = fact::test::gaussian_matrix<MatrixXcd>(k + n + 3, k + n + 3, rng, gauss);
+        check(A.block(1, 2, m, k), B.block(2, 1, k, n), alpha, accumulate);
+        check(A.block(1, 2, m, k), B.block(2, 1, n, k).adjoint(), alpha, accumulate);
+        check(A.block(1, 2, k, m).adjoint(), B.block(2, 1, k, n), alpha, accumulate);
+        check(A.block(1, 2, k, m).adjoint(), B.block(2, 1, n, k).adjoint(), alpha, accumulate);
+      }
 }
 
 // The 16 × 16 tiles of for_each_entry_below_diagonal visit every entry below the diagonal exactly

@@ -320,9 +320,8 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
     inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
   } else {
     Eigen::MatrixXcd BA(m, k);  // B A⁻¹
-    multiply_complex(L.bottomLeftCorner(m, k), Op::plain, inverse.topLeftCorner(k, k), Op::plain, BA, 1.0, false);
-    multiply_complex(inverse.bottomRightCorner(m, m), Op::plain, BA, Op::plain, inverse.bottomLeftCorner(m, k), -1.0,
-                     false);
+    multiply_complex(L.bottomLeftCorner(m, k), inverse.topLeftCorner(k, k), BA, 1.0, false);
+    multiply_complex(inverse.bottomRightCorner(m, m), BA, inverse.bottomLeftCorner(m, k), -1.0, false);
   }
 }
 
@@ -339,7 +338,11 @@ void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen:
                    Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> W) {
   const Eigen::Index n = G.rows();
   if (n <= kGramBlock) {
-    W.noalias() = G.adjoint() * G;
+    if constexpr (std::is_same_v<Scalar, double>) {
+      W.noalias() = G.transpose() * G;
+    } else {
+      multiply_complex(G.adjoint(), G, W, 1.0, false);
+    }
     return;
   }
   const Eigen::Index k = n / 2, m = n - k;
@@ -350,8 +353,8 @@ void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen:
     W.bottomLeftCorner(m, k).noalias() = G.bottomRightCorner(m, m).transpose() * G.bottomLeftCorner(m, k);  // Cᵀ B
   } else {
     const auto B = G.bottomLeftCorner(m, k);
-    multiply_complex(B, Op::adjoint, B, Op::plain, W.topLeftCorner(k, k), 1.0, true);  // + Bᴴ B
-    multiply_complex(G.bottomRightCorner(m, m), Op::adjoint, B, Op::plain, W.bottomLeftCorner(m, k), 1.0, false);  // Cᴴ B
+    multiply_complex(B.adjoint(), B, W.topLeftCorner(k, k), 1.0, true);                          // + Bᴴ B
+    multiply_complex(G.bottomRightCorner(m, m).adjoint(), B, W.bottomLeftCorner(m, k), 1.0, false);  // Cᴴ B
   }
   W.topRightCorner(k, m) = W.bottomLeftCorner(m, k).adjoint();
 }
@@ -366,6 +369,11 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
+  // Products by three real ones (multiply_complex) give a Gram block whose (i, j) and (j, i)
+  // entries differ in the last bits and a diagonal with a rounding-sized imaginary part: W is made
+  // Hermitian from its lower triangle (its readers take either triangle).
+  W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
+  for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
 }
 
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
