@@ -379,8 +379,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--list-false", o.list_false, "Print every false detection with the visible drones' boxes");
   bool quick = false;
   cli.add_flag("--quick", quick, "2 episodes, 60 renderer frames (a smoke run)");
-  fact::app::refuse_empty_values(cli);
-  CLI11_PARSE(cli, argc, argv);
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   if (quick) o.episodes = 2, o.render_frames = 60;
   if (o.episodes < 1 || o.drones < 2 || o.render_frames < 1 || !(o.spin_rate > 0) || !(o.camera_rate > 0) ||
       !(o.eligible_range > 0)) {

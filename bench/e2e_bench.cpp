@@ -375,8 +375,7 @@ int main(int argc, char** argv) {
   cli.add_option("--summarize", o.summarize,
                  "Run nothing: merge these e2e_runs.csv files (batches of seeds) into <out-dir>/e2e_runs.csv\n"
                  "and write e2e.csv and e2e_summary.txt from them");
-  fact::app::refuse_empty_values(cli);
-  CLI11_PARSE(cli, argc, argv);
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   if (!o.summarize.empty()) return summarize(o);
   // (NaN passes CLI11's ranges; a rate of 0 or a missing run-sim.sh made every run fail, and the
   // benchmark wrote a 0 % success table and exited 0; review, session 34)

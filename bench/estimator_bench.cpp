@@ -917,8 +917,7 @@ int main(int argc, char** argv) {
       ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  fact::app::refuse_empty_values(app);
-  CLI11_PARSE(app, argc, argv);
+  if (const int code = fact::app::parse_command_line(app, argc, argv); code >= 0) return code;
 
   const auto start = Clock::now();
   try {

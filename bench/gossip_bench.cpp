@@ -678,12 +678,7 @@ int main(int argc, char** argv) {
   cli.add_option("--solver-bin", c.solver_bin, "fact-solver executable (spin scenario)")->capture_default_str();
   cli.add_option("--log", c.log, "Where the processes' log lines go")->capture_default_str();
   cli.add_flag("--quick", c.quick, "3 rounds every 1.5 s, 8 s of spin scenario (where --rounds, --period or --spin-seconds do not say)");
-  fact::app::refuse_empty_values(cli);
-  try {
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   if (c.quick) {  // a flag given explicitly wins, in whatever order
     if (cli.count("--rounds") == 0) c.rounds = 3;
     if (cli.count("--period") == 0) c.period = 1.5;

@@ -149,8 +149,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--verbose", o.verbose, "Print every drone's pose, detections and plan");
   bool quick = false;
   cli.add_flag("--quick", quick, "50 episodes (a smoke run)");
-  fact::app::refuse_empty_values(cli);
-  CLI11_PARSE(cli, argc, argv);
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   if (quick) o.episodes = 50;
   if (o.episodes < 1 || o.frames < 1 || !(o.dt > 0)) {
     std::cerr << "fact-bench-planner: --episodes, --frames must be >= 1 and --dt > 0\n";

@@ -168,4 +168,22 @@ TEST_F(E2eBenchSummary, AForeignOrMissingFileExits2AndAnUnwritableOutDirExits1) 
   EXPECT_NE(ran.out.find("--repo and --build are required"), std::string::npos) << ran.out;
 }
 
+// A value a flag's check refuses, an unknown flag and an empty value exit 2 like every app's bad
+// flag (CLI11_PARSE exited 105, 109 and 105), naming the flag; --help exits 0.
+TEST_F(E2eBenchSummary, BadFlagsExit2AndHelpExits0) {
+  const std::string bench = FACT_BENCH_E2E_BINARY;
+  fact::test::Ran ran = fact::test::run_command(bench + " --seeds 010");
+  EXPECT_EQ(ran.code, 2) << ran.out;
+  EXPECT_NE(ran.out.find("--seeds"), std::string::npos) << ran.out;
+  ran = fact::test::run_command(bench + " --no-such-flag");
+  EXPECT_EQ(ran.code, 2) << ran.out;
+  EXPECT_NE(ran.out.find("--no-such-flag"), std::string::npos) << ran.out;
+  ran = fact::test::run_command(bench + " --seeds ''");
+  EXPECT_EQ(ran.code, 2) << ran.out;
+  EXPECT_NE(ran.out.find("empty"), std::string::npos) << ran.out;
+  ran = fact::test::run_command(bench + " --help");
+  EXPECT_EQ(ran.code, 0) << ran.out;
+  EXPECT_NE(ran.out.find("--seeds"), std::string::npos) << ran.out;
+}
+
 }  // namespace

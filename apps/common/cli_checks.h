@@ -57,4 +57,18 @@ inline void refuse_empty_values(CLI::App& app) {
     if (option->get_type_size() != 0) option->check(non_empty);
 }
 
+// refuse_empty_values, then CLI11's parse with the apps' exit codes: -1 when the program should go
+// on, else the code to exit with, 0 after --help and 2 after a bad flag (CLI11's message on
+// stderr). CLI11_PARSE would exit with CLI11's own codes instead (105 for a value a check refused,
+// 109 for an unknown flag), which scripts that test for 2 took for success of another kind.
+inline int parse_command_line(CLI::App& cli, int argc, char** argv) {
+  try {
+    refuse_empty_values(cli);
+    cli.parse(argc, argv);
+    return -1;
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e) == 0 ? 0 : 2;
+  }
+}
+
 }  // namespace fact::app

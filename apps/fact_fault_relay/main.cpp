@@ -298,12 +298,7 @@ int main(int argc, char** argv) {
   cli.add_option("--status-channel", f.status_channel, "Status channel (on the drone URL)")->capture_default_str();
   cli.add_option("--status-period", f.status_period, "s between status messages (0.001 … 3600)")->capture_default_str();
   cli.footer("Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags; 1 LCM unusable.");
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   fact::app::Log boot("fact-fault-relay", f.drone_id);
   if (const std::string e = flags_error(f); !e.empty()) {
     boot.event("error: " + e);

@@ -522,12 +522,7 @@ int main(int argc, char** argv) {
       "interpolated at it). Envelopes are authenticated with libsodium crypto_auth (HMAC-SHA512-256) over "
       "kind|sender|seq|payload. Make a key: head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \\n' > swarm.key\n"
       "Exit codes: 0 stopped by SIGINT/SIGTERM; 2 bad flags, key or options; 1 LCM unusable.");
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   fact::app::Log boot("fact-gossip", f.common.drone_id);
   try {
     fact::app::check_common_flags(f.common, fact::app::DroneIdFlag::required);

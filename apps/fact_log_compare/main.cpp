@@ -156,12 +156,7 @@ int main(int argc, char** argv) {
   cli.add_flag("--no-planner", no_planner, "Compare the results only");
   cli.footer("Exit codes: 0 everything matches; 1 something differs; 2 bad flags, unreadable log, no result, or a log\n"
              "that lost messages (fewer results or rounds of a compared drone than its apps' status counters grew by in it).");
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   const Channels ch{result_channel + "_", rounds_channel + "_", status_channel};
   std::map<int, DroneTrace> a, b;
   if (!read_log(original, ch, &a) || !read_log(replay, ch, &b)) return 2;

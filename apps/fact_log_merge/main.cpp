@@ -73,12 +73,7 @@ int main(int argc, char** argv) {
   cli.add_option("--output", output, "The merged log to write")->required()->type_name("FILE");
   cli.add_option("inputs", inputs, "The logs to merge")->required()->type_name("LOG");
   cli.footer("Exit codes: 0 merged; 1 the output cannot be written; 2 bad flags or an unreadable input.");
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   std::vector<Input> in(inputs.size());
   for (size_t i = 0; i < inputs.size(); ++i) {
     if (fact::same_file(inputs[i], output)) {

@@ -632,12 +632,7 @@ int main(int argc, char** argv) {
              "4 certified but outside the bounds, leaving out a drone, or the drones disagree; 2 bad flags,\n"
              "an unreadable or damaged log, no truth, or a --json / --png that cannot be written.\n"
              "A log with no result at all is not certified (3); one whose results cannot be decoded is damaged (2).");
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   for (auto [name, v] : {std::pair{"--yaw-bound", o.yaw_bound}, {"--position-bound", o.position_bound}, {"--edge-gate", o.edge_gate}})
     if (!(std::isfinite(v) && v > 0)) {
       std::cerr << kApp << ": error: " << name << ": expected a number > 0, got " << v << "\n";

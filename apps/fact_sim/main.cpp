@@ -751,12 +751,7 @@ int main(int argc, char** argv) {
   CLI::App cli{"fact-sim: simulated drones in a room — rendered gray + depth frames, raw VIO, ground truth"};
   Options o;
   add_flags(cli, o);
-  try {
-    fact::app::refuse_empty_values(cli);
-    cli.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return cli.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int code = fact::app::parse_command_line(cli, argc, argv); code >= 0) return code;
   fact::app::Log log(kApp, -1);
   fact::sim::World world;
   try {
