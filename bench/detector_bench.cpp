@@ -37,6 +37,7 @@
 #include "fact/world_io.h"
 #include "common/cli_checks.h"
 #include "results_file.h"
+#include "stats.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -80,19 +81,9 @@ struct Options {
   float min_score = fact::TrackerOptions{}.high_score;
 };
 
-// The middle value, or the mean of the two middle values of an even count (it was the upper one).
-double median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  const size_t h = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + h, v.end());
-  if (v.size() % 2) return v[h];
-  return 0.5 * (v[h] + *std::max_element(v.begin(), v.begin() + h));
-}
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
-}
+using fact::bench::median;
+// (the table's p90 and p95 are the order statistics nearest to q·(n − 1))
+double percentile(std::vector<double> v, double p) { return fact::bench::nearest_order_statistic(std::move(v), p); }
 
 // A box grown about its centre to at least `side` px per side (far drones are a few px tall).
 fact::BoxDetection grown(fact::BoxDetection b, float side) {

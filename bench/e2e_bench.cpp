@@ -30,6 +30,7 @@
 
 #include "common/cli_checks.h"
 #include "results_file.h"
+#include "stats.h"
 
 namespace {
 
@@ -245,13 +246,8 @@ std::vector<Run> read_runs_files(const std::vector<std::string>& paths) {
   return runs;
 }
 
-double median(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
+// The median of the finite values.
+double median(std::vector<double> v) { return fact::bench::median(fact::bench::finite_values(std::move(v))); }
 
 double mean(const std::vector<double>& v) {
   double s = 0;
@@ -309,10 +305,8 @@ void write_summaries(const std::string& out_dir, const std::map<int, std::vector
       }
       cpu.push_back(drone_cpu_percent(r));
     }
-    std::vector<double> sorted = times;
-    std::sort(sorted.begin(), sorted.end());
     // Nearest rank, ⌈0.9 n⌉ (it was index ⌊0.9 n⌋: the maximum of 10 runs)
-    const double p90 = sorted.empty() ? NAN : sorted[(sorted.size() * 9 + 9) / 10 - 1];
+    const double p90 = fact::bench::nearest_rank(times, 90);
     const double success = 100.0 * ok / static_cast<double>(runs.size());
     csv << n << ',' << runs.size() << ',' << success << ',' << wrong << ',' << median(times) << ',' << p90 << ','
         << median(rounds) << ',' << mean(yaw) << ',' << median(pos) << ',' << mean(cpu) << '\n';

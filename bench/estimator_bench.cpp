@@ -29,6 +29,7 @@
 #include "fact/simgen.h"
 #include "common/cli_checks.h"
 #include "results_file.h"
+#include "stats.h"
 #include "rotation_baselines.h"
 
 namespace {
@@ -47,14 +48,7 @@ double micros_since(Clock::time_point t) { return std::chrono::duration<double, 
 // ---------------------------------------------------------------------------------------------
 // Statistics and formatting
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (pos - lo) * (v[hi] - v[lo]);
-}
+using fact::bench::quantile;
 double median(const std::vector<double>& v) { return quantile(v, 0.5); }
 double p95(const std::vector<double>& v) { return quantile(v, 0.95); }
 double mean(const std::vector<double>& v) {

@@ -40,6 +40,7 @@
 #include "fact/swarm_rounds_t.hpp"
 #include "fact_gossip/wire.h"
 #include "results_file.h"
+#include "stats.h"
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -325,11 +326,7 @@ std::string roster(int n) {
   return s;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using fact::bench::median;
 
 struct Row {
   std::string scenario, metric;

@@ -39,6 +39,7 @@
 #include "fact/sim_world.h"
 #include "common/cli_checks.h"
 #include "results_file.h"
+#include "stats.h"
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
@@ -78,14 +79,8 @@ struct Options {
   bool verbose = false;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const double idx = q * (v.size() - 1);
-  const size_t i = static_cast<size_t>(std::floor(idx));
-  const size_t j = std::min(v.size() - 1, i + 1);
-  return v[i] + (idx - i) * (v[j] - v[i]);
-}
+// (linear between order statistics)
+double percentile(std::vector<double> v, double q) { return fact::bench::quantile(std::move(v), q); }
 
 // Adds 0–3 random obstacles clear of every takeoff spot's vertical line (by `clear` m).
 void add_random_obstacles(sim::World* w, std::mt19937_64& gen, double clear) {

@@ -22,6 +22,7 @@
 #include "instances.h"
 #include "peers.h"
 #include "results_file.h"
+#include "stats.h"
 
 namespace {
 
@@ -108,12 +109,7 @@ Instance make_instance(const std::string& name, int drones) {
   throw std::invalid_argument("unknown instance " + name);
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return (v.size() % 2) ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
+using fact::bench::median;
 
 struct OurTiming {
   fact::sdp::Result result;  // of the last repetition (all are identical: fixed seed)
