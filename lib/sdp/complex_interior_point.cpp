@@ -129,27 +129,11 @@ void set_slack_diagonal(const MatrixXcd& H, const VectorXd& y, MatrixXcd& Z) {
   Z.diagonal() = H.diagonal() - y.cast<std::complex<double>>();
 }
 
-// From this N on the Lanczos steps multiply by the explicit Lz⁻¹ (and its adjoint) as a triangular
-// matrix, below it as a dense one. On an AVX2 machine Eigen's triangular matrix–vector product
-// took n = 32 / 64 / 100 / 200: 0.56 / 1.46 / 2.96 / 10.0 µs (adjoint 0.39 / 1.18 / 2.51 / 9.5)
-// against the dense product's 0.34 / 1.53 / 3.76 / 15.7 (0.42 / 1.58 / 3.64 / 15.2); on AVX-512 the
-// dense product was the faster at n = 100 (BENCHMARKS.md, sessions 29 and 35).
-constexpr Eigen::Index kTriangularProductMinSize = 64;
-
 // The step for Z + α ΔZ with ΔZ = −diag(Δy), Z = H − diag(y); the trial is H − diag(y + α Δy).
-// Lanczos on Lz⁻¹ ΔZ Lz⁻ᴴ through the explicit Lz⁻¹.
+// Lanczos on Lz⁻¹ ΔZ Lz⁻ᴴ through the explicit Lz⁻¹ (dual_step_operator).
 double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, const VectorXd& dy, Workspace& ws, double tau) {
-  const bool triangular = Z.rows() >= kTriangularProductMinSize;
   const double lowest = lanczos_lowest<Eigen::VectorXcd>(Z.rows(), lanczos_steps(tau), [&](const Eigen::VectorXcd& v, Eigen::VectorXcd& w) {
-    if (triangular) {
-      ws.u.noalias() = ws.Lz_inv.triangularView<Eigen::Lower>().adjoint() * v;  // Lz⁻ᴴ v
-      ws.u.array() *= -dy.array();                                             // ΔZ Lz⁻ᴴ v
-      w.noalias() = ws.Lz_inv.triangularView<Eigen::Lower>() * ws.u;           // Lz⁻¹ ΔZ Lz⁻ᴴ v
-      return;
-    }
-    ws.u.noalias() = ws.Lz_inv.adjoint() * v;
-    ws.u.array() *= -dy.array();
-    w.noalias() = ws.Lz_inv * ws.u;
+    dual_step_operator(ws.Lz_inv, dy, v, ws.u, w);
   });
   return step_length(lowest, tau, ws, ws.next_z, [&](double a) {
     ws.trial = Z;
@@ -183,6 +167,19 @@ double complementarity_after(const MatrixXcd& X, const MatrixXcd& dx, double a, 
 }
 
 }  // namespace
+
+void dual_step_operator(const Eigen::MatrixXcd& Lz_inv, const Eigen::VectorXd& dy, const Eigen::VectorXcd& v,
+                        Eigen::VectorXcd& u, Eigen::VectorXcd& w) {
+  if (Lz_inv.rows() >= kTriangularProductMinSize) {
+    u.noalias() = Lz_inv.triangularView<Eigen::Lower>().adjoint() * v;  // Lz⁻ᴴ v
+    u.array() *= -dy.array();                                          // ΔZ Lz⁻ᴴ v
+    w.noalias() = Lz_inv.triangularView<Eigen::Lower>() * u;           // Lz⁻¹ ΔZ Lz⁻ᴴ v
+    return;
+  }
+  u.noalias() = Lz_inv.adjoint() * v;
+  u.array() *= -dy.array();
+  w.noalias() = Lz_inv * u;
+}
 
 ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd& H, const Options& options,
                                                          double handoff_gap, const ComplexInteriorPointOutcome* resume) {

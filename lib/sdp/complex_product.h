@@ -25,7 +25,7 @@ namespace fact::sdp::detail {
 constexpr Eigen::Index kThreeProductMinSize = 16;
 
 // The calling thread's scratch for the split operands: at least `count` doubles, grown to the
-// largest request seen and kept (2.6 MB for a 200 × 200 × 200 product).
+// largest request seen and kept (1.9 MB for a 200 × 200 × 200 product).
 double* product_scratch(std::size_t count);
 
 // C = α·(a + ib)(c + id), or C += … with accumulate, for a, b m × k and c, d k × n held in
@@ -35,13 +35,15 @@ void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1,
                          Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> C, double alpha, bool accumulate);
 
 // C = α·L·R, or C += α·L·R with accumulate, for complex expressions L (m × k) and R (k × n), e.g.
-// blocks or their adjoints, and C an m × n block that overlaps neither. By three real products
+// blocks or their adjoints, and C an m × n block that overlaps neither (a matrix is resized to
+// m × n first; a block of another size is a caller's error, asserted in debug builds). By three real products
 // when m, n and k are all at least kThreeProductMinSize; below, Eigen's product on L and R as
 // given (on blocks Eigen multiplies small operands coefficient by coefficient, and α = ±1 is
 // written as a sum or difference so that it keeps that path).
 template <class Lhs, class Rhs, class Dest>
 void multiply_complex(const Lhs& L, const Rhs& R, Dest&& C, double alpha, bool accumulate) {
   const Eigen::Index m = L.rows(), k = L.cols(), n = R.cols();
+  C.resize(m, n);  // (the three-product path writes through a Ref, which cannot resize)
   if (std::min({m, n, k}) < kThreeProductMinSize) {
     if (alpha == 1.0 && accumulate) {
       C.noalias() += L * R;

@@ -518,6 +518,17 @@ struct ComplexInteriorPointOutcome {
   std::string reason;       // why it stopped when not converged
 };
 
+// The complex interior point's dual step-length operator: w = Lz⁻¹ ΔZ Lz⁻ᴴ v with ΔZ = −diag(dy)
+// (Lz⁻¹ N × N lower triangular, zeros above; dy, v, u, w N; u is scratch). From
+// kTriangularProductMinSize rows Lz⁻¹ is multiplied as a triangular matrix, below as a dense one:
+// on an AVX2 machine Eigen's triangular matrix–vector product took n = 32 / 64 / 100 / 200:
+// 0.56 / 1.46 / 2.96 / 10.0 µs (adjoint 0.39 / 1.18 / 2.51 / 9.5) against the dense product's
+// 0.34 / 1.53 / 3.76 / 15.7 (0.42 / 1.58 / 3.64 / 15.2); on AVX-512 the dense product was the
+// faster at n = 100 (BENCHMARKS.md, sessions 29 and 35).
+constexpr Eigen::Index kTriangularProductMinSize = 64;
+void dual_step_operator(const Eigen::MatrixXcd& Lz_inv, const Eigen::VectorXd& dy, const Eigen::VectorXcd& v,
+                        Eigen::VectorXcd& u, Eigen::VectorXcd& w);
+
 // Primal–dual path following on the Hermitian N × N problem min Re tr(H X), X_ii = 1, X ⪰ 0
 // (complex_interior_point.cpp), HKM direction and Mehrotra corrector, stopping once the
 // relative gap is below handoff_gap (> 0: handed_off is set). `resume` (an outcome that handed
