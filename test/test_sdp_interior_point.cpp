@@ -498,7 +498,7 @@ TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) 
   expect_cholesky_on_every_path<Eigen::MatrixXcd>(rng);
 }
 
-// multiply_complex against Eigen's complex product: blocks and adjoints of blocks of larger matrices
+// multiply against Eigen's complex product: blocks and adjoints of blocks of larger matrices
 // (an outer stride) on either side, assigned and accumulated, with α = 1, −1 and −0.75, on shapes
 // below, at and above kThreeProductMinSize in each dimension (m × k times k × n). The
 // three-product form's error is normwise of the usual product's order: within 1e-14 of
@@ -508,7 +508,7 @@ TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
   constexpr Eigen::Index t = fact::sdp::detail::kThreeProductMinSize;
   std::mt19937 rng(31);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  // L, R: the operands as multiply_complex gets them; C_store holds the m × n block C.
+  // L, R: the operands as multiply gets them; C_store holds the m × n block C.
   auto check = [&](const auto& L, const auto& R, double alpha, bool accumulate) {
     const Eigen::Index m = L.rows(), n = R.cols();
     const MatrixXcd l = L, r = R;
@@ -519,7 +519,7 @@ TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
     } else {
       expected.block(2, 3, m, n) = alpha * l * r;
     }
-    fact::sdp::detail::multiply_complex(L, R, C_store.block(2, 3, m, n), alpha, accumulate);
+    fact::sdp::detail::multiply(L, R, C_store.block(2, 3, m, n), alpha, accumulate);
     EXPECT_LT((C_store - expected).norm(), 1e-14 * l.norm() * r.norm());
     C_store.block(2, 3, m, n) = expected.block(2, 3, m, n);
     EXPECT_TRUE((C_store.array() == expected.array()).all()) << "an entry outside the block changed";
@@ -540,10 +540,62 @@ TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
       }
 }
 
+// multiply with a triangular operand (Shape::lower or Shape::upper, zeros outside the triangle)
+// against Eigen's product of the dense matrices, real and complex: lower and upper on either side,
+// a block of a lower-triangular matrix and its adjoint (the inverse and Gram kernels' operands),
+// below, at and above kThreeProductMinSize and kTriangularShapeMinSize, assigned and accumulated, α = 1, −1 and −0.75. With
+// the wrong triangle the product misses half of the operand's entries.
+template <class Matrix>
+void expect_triangular_products_match(std::mt19937& rng) {
+  using fact::sdp::detail::multiply;
+  using fact::sdp::detail::Shape;
+  constexpr Eigen::Index t = fact::sdp::detail::kThreeProductMinSize;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  constexpr Eigen::Index s = fact::sdp::detail::kTriangularShapeMinSize;
+  for (const Eigen::Index k : {Eigen::Index{5}, t - 1, t, s - 1, s, Eigen::Index{101}})
+    for (const Eigen::Index other : {t, s - 1, s + 24})
+      for (const double alpha : {1.0, -1.0, -0.75})
+        for (const bool accumulate : {false, true}) {
+          SCOPED_TRACE(testing::Message() << "k " << k << ", other " << other << ", alpha " << alpha << ", accumulate "
+                                          << accumulate);
+          // T_store's block (1, 1) is a k × k lower-triangular matrix, zeros above its diagonal.
+          Matrix T_store = fact::test::gaussian_matrix<Matrix>(k + 3, k + 3, rng, gauss);
+          T_store.block(1, 1, k, k) = Matrix(T_store.block(1, 1, k, k).template triangularView<Eigen::Lower>());
+          const auto T = T_store.block(1, 1, k, k);
+          const Matrix t_lower = T, t_upper = T.adjoint();
+          const Matrix R = fact::test::gaussian_matrix<Matrix>(k, other, rng, gauss);
+          const Matrix L = fact::test::gaussian_matrix<Matrix>(other, k, rng, gauss);
+          const Matrix start = fact::test::gaussian_matrix<Matrix>(k, other, rng, gauss);
+          const Matrix start_t = start.transpose();
+          const double tol = 1e-14 * t_lower.norm() * R.norm();
+          auto expected = [&](const Matrix& product, const Matrix& before) -> Matrix {
+            return accumulate ? Matrix(before + alpha * product) : Matrix(alpha * product);
+          };
+          Matrix C = start;
+          multiply<Shape::lower>(T, R, C, alpha, accumulate);
+          EXPECT_LT((C - expected(t_lower * R, start)).norm(), tol) << "lower · dense";
+          C = start;
+          multiply<Shape::upper>(T.adjoint(), R, C, alpha, accumulate);
+          EXPECT_LT((C - expected(t_upper * R, start)).norm(), tol) << "upper · dense";
+          C = start_t;
+          multiply<Shape::dense, Shape::lower>(L, T, C, alpha, accumulate);
+          EXPECT_LT((C - expected(L * t_lower, start_t)).norm(), tol) << "dense · lower";
+          C = start_t;
+          multiply<Shape::dense, Shape::upper>(L, T.adjoint(), C, alpha, accumulate);
+          EXPECT_LT((C - expected(L * t_upper, start_t)).norm(), tol) << "dense · upper";
+        }
+}
+
+TEST(SdpKernels, MultiplyWithATriangularOperandMatchesEigensProduct) {
+  std::mt19937 rng(41);
+  expect_triangular_products_match<Eigen::MatrixXd>(rng);
+  expect_triangular_products_match<Eigen::MatrixXcd>(rng);
+}
+
 // The dual step-length operator w = Lz⁻¹ ΔZ Lz⁻ᴴ v (ΔZ = −diag(dy)) against the dense formula, on
 // both of its paths (dense below kTriangularProductMinSize rows, triangular from it); with the
 // wrong triangle or without the adjoint the interior point's steps went wrong without a test
-// noticing (review, helper-38). A resized destination of multiply_complex is covered here too.
+// noticing (review, helper-38). A resized destination of multiply is covered here too.
 TEST(SdpKernels, DualStepOperatorIsLzInverseTimesDeltaZTimesItsAdjoint) {
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -562,8 +614,8 @@ TEST(SdpKernels, DualStepOperatorIsLzInverseTimesDeltaZTimesItsAdjoint) {
     const Eigen::MatrixXcd lower = Lz_inv.triangularView<Eigen::Lower>();
     const Eigen::VectorXcd expected = lower * (-dy).asDiagonal() * lower.adjoint() * v;
     EXPECT_LT((w - expected).norm(), 1e-13 * expected.norm());
-    Eigen::MatrixXcd product;  // empty: multiply_complex sizes it
-    fact::sdp::detail::multiply_complex(lower, lower.adjoint(), product, 1.0, false);
+    Eigen::MatrixXcd product;  // empty: multiply sizes it
+    fact::sdp::detail::multiply(lower, lower.adjoint(), product, 1.0, false);
     ASSERT_EQ(product.rows(), n);
     ASSERT_EQ(product.cols(), n);
     EXPECT_LT((product - lower * lower.adjoint()).norm(), 1e-14 * lower.norm() * lower.norm());

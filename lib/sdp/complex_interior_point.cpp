@@ -149,10 +149,10 @@ double dual_step(const MatrixXcd& Z, const MatrixXcd& H, const VectorXd& y, cons
 // point, interior_point.cpp).
 void primal_direction(const MatrixXcd& X, double sigma_mu, bool accurate, Workspace& ws, MatrixXcd& dx) {
   if (accurate) {
-    multiply_complex(ws.P, ws.Lz_inv.adjoint(), ws.PZ, 1.0, false);  // P Lz⁻ᴴ
-    multiply_complex(ws.PZ, ws.Lz_inv, dx, -1.0, false);             // −P Z⁻¹
+    multiply<Shape::dense, Shape::upper>(ws.P, ws.Lz_inv.adjoint(), ws.PZ, 1.0, false);  // P Lz⁻ᴴ
+    multiply<Shape::dense, Shape::lower>(ws.PZ, ws.Lz_inv, dx, -1.0, false);             // −P Z⁻¹
   } else {
-    multiply_complex(ws.P, ws.W, dx, -1.0, false);
+    multiply(ws.P, ws.W, dx, -1.0, false);
   }
   dx -= X;
   if (sigma_mu != 0) dx += sigma_mu * ws.W;

@@ -11,10 +11,31 @@ double* product_scratch(std::size_t count) {
   return buffer.data();
 }
 
+namespace {
+
+// t = l·r, through Eigen's triangular product when l or r is triangular.
+template <Shape LhsShape, Shape RhsShape>
+void real_product(const RealMap& l, const RealMap& r, RealMap& t) {
+  if constexpr (LhsShape == Shape::lower) {
+    t.noalias() = l.triangularView<Eigen::Lower>() * r;
+  } else if constexpr (LhsShape == Shape::upper) {
+    t.noalias() = l.triangularView<Eigen::Upper>() * r;
+  } else if constexpr (RhsShape == Shape::lower) {
+    t.noalias() = l * r.triangularView<Eigen::Lower>();
+  } else if constexpr (RhsShape == Shape::upper) {
+    t.noalias() = l * r.triangularView<Eigen::Upper>();
+  } else {
+    t.noalias() = l * r;
+  }
+}
+
+}  // namespace
+
+template <Shape LhsShape, Shape RhsShape>
 void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1, RealMap t2,
                          Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> C, double alpha, bool accumulate) {
-  t1.noalias() = a * c;  // ac
-  t2.noalias() = b * d;  // bd
+  real_product<LhsShape, RhsShape>(a, c, t1);  // ac
+  real_product<LhsShape, RhsShape>(b, d, t2);  // bd
   if (accumulate) {
     C.real() += alpha * (t1 - t2);
   } else {
@@ -23,12 +44,23 @@ void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1,
   t1 += t2;  // ac + bd
   a += b;
   c += d;
-  t2.noalias() = a * c;  // (a + b)(c + d)
+  real_product<LhsShape, RhsShape>(a, c, t2);  // (a + b)(c + d)
   if (accumulate) {
     C.imag() += alpha * (t2 - t1);
   } else {
     C.imag() = alpha * (t2 - t1);
   }
 }
+
+// The shapes multiply is used with.
+#define FACT_THREE_REAL_PRODUCTS(LHS, RHS)                                                                            \
+  template void three_real_products<LHS, RHS>(RealMap, RealMap, RealMap, RealMap, RealMap, RealMap,                    \
+                                              Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>>, double, bool);
+FACT_THREE_REAL_PRODUCTS(Shape::dense, Shape::dense)
+FACT_THREE_REAL_PRODUCTS(Shape::lower, Shape::dense)
+FACT_THREE_REAL_PRODUCTS(Shape::upper, Shape::dense)
+FACT_THREE_REAL_PRODUCTS(Shape::dense, Shape::lower)
+FACT_THREE_REAL_PRODUCTS(Shape::dense, Shape::upper)
+#undef FACT_THREE_REAL_PRODUCTS
 
 }  // namespace fact::sdp::detail

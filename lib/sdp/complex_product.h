@@ -1,5 +1,6 @@
 // Products of complex matrices for the complex form's interior point and Newton (N × N, N up to
-// a few hundred), through real matrix products.
+// a few hundred), through real matrix products, and of real or complex matrices with a triangular
+// operand (multiply).
 //
 // Eigen's complex matrix-product kernel runs at about two thirds of its real kernel's rate on a
 // machine without AVX-512 (AMD EPYC, AVX2: a 200 × 200 complex product took 3.1 ms, four real
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <complex>
 #include <cstddef>
+#include <type_traits>
 
 #include <Eigen/Dense>
 
@@ -24,51 +26,108 @@ namespace fact::sdp::detail {
 // 16: 0.96 / 1.09 / 1.15 of its time by three real products, splitting included).
 constexpr Eigen::Index kThreeProductMinSize = 16;
 
+// Where an operand's entries may be nonzero: anywhere, or on and below (lower) or on and above
+// (upper) its diagonal, the rest zero. A triangular operand's three real products go through
+// Eigen's triangular product, which skips the zero triangle: 0.56–0.62 of a dense product's time
+// at n = 100 … 200 on the AVX2 machine (BENCHMARKS.md, session 36).
+enum class Shape { dense, lower, upper };
+// Below this, in any dimension, a triangular operand is multiplied as a dense one: Eigen's
+// triangular product was 1.6× slower than the dense one on 16 × 16 blocks (inverse of n = 32),
+// as fast on 24 and 32, faster from 50 (BENCHMARKS.md, session 36).
+constexpr Eigen::Index kTriangularShapeMinSize = 40;
+
 // The calling thread's scratch for the split operands: at least `count` doubles, grown to the
 // largest request seen and kept (1.9 MB for a 200 × 200 × 200 product).
 double* product_scratch(std::size_t count);
 
 // C = α·(a + ib)(c + id), or C += … with accumulate, for a, b m × k and c, d k × n held in
-// scratch (t1, t2 m × n); a and c are overwritten.
+// scratch (t1, t2 m × n); a and c are overwritten. At most one operand is triangular (a, b for
+// LhsShape; c, d for RhsShape), with zeros outside its triangle.
 using RealMap = Eigen::Map<Eigen::MatrixXd>;
+template <Shape LhsShape, Shape RhsShape>
 void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1, RealMap t2,
                          Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> C, double alpha, bool accumulate);
 
-// C = α·L·R, or C += α·L·R with accumulate, for complex expressions L (m × k) and R (k × n), e.g.
-// blocks or their adjoints, and C an m × n block that overlaps neither (a matrix is resized to
-// m × n first; a block of another size is a caller's error, asserted in debug builds). By three real products
-// when m, n and k are all at least kThreeProductMinSize; below, Eigen's product on L and R as
-// given (on blocks Eigen multiplies small operands coefficient by coefficient, and α = ±1 is
-// written as a sum or difference so that it keeps that path).
+// C = α·L·R, or C += α·L·R with accumulate, by Eigen's product of L and R as given (on small
+// blocks Eigen multiplies coefficient by coefficient, and α = ±1 is written as a sum or
+// difference so that it keeps that path).
 template <class Lhs, class Rhs, class Dest>
-void multiply_complex(const Lhs& L, const Rhs& R, Dest&& C, double alpha, bool accumulate) {
+void multiply_as_given(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accumulate) {
+  using Scalar = typename std::decay_t<Dest>::Scalar;
+  if (alpha == 1.0 && accumulate) {
+    C.noalias() += L * R;
+  } else if (alpha == 1.0) {
+    C.noalias() = L * R;
+  } else if (alpha == -1.0 && accumulate) {
+    C.noalias() -= L * R;
+  } else if (alpha == -1.0) {
+    C.noalias() = -L * R;
+  } else if (accumulate) {
+    C.noalias() += Scalar(alpha) * (L * R);
+  } else {
+    C.noalias() = Scalar(alpha) * (L * R);
+  }
+}
+
+// C = α·L·R, or C += α·L·R, for real L and R, one of them triangular (shape), by Eigen's
+// triangular product.
+template <Shape LhsShape, Shape RhsShape, class Lhs, class Rhs, class Dest>
+void multiply_real_triangular(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accumulate) {
+  constexpr unsigned mode = (LhsShape == Shape::lower || RhsShape == Shape::lower) ? Eigen::Lower : Eigen::Upper;
+  if (!accumulate) C.setZero();
+  if constexpr (LhsShape != Shape::dense) {
+    if (alpha == 1.0) {
+      C.noalias() += L.template triangularView<mode>() * R;
+    } else if (alpha == -1.0) {
+      C.noalias() -= L.template triangularView<mode>() * R;
+    } else {
+      C += alpha * Eigen::MatrixXd(L.template triangularView<mode>() * R);
+    }
+  } else {
+    if (alpha == 1.0) {
+      C.noalias() += L * R.template triangularView<mode>();
+    } else if (alpha == -1.0) {
+      C.noalias() -= L * R.template triangularView<mode>();
+    } else {
+      C += alpha * Eigen::MatrixXd(L * R.template triangularView<mode>());
+    }
+  }
+}
+
+// C = α·L·R, or C += α·L·R with accumulate, for real or complex expressions L (m × k) and R
+// (k × n), e.g. blocks or their adjoints, L of shape LhsShape and R of shape RhsShape (at most one
+// triangular, square, its other triangle zero: the products may skip it), and C an m × n block
+// that overlaps neither (a matrix is resized to m × n first; a block of another size is a
+// caller's error, asserted in debug builds). Below kThreeProductMinSize in any dimension,
+// Eigen's product of the operands as given; from it complex operands go through three real
+// products, and from kTriangularShapeMinSize a triangular operand's products through Eigen's
+// triangular product.
+template <Shape LhsShape = Shape::dense, Shape RhsShape = Shape::dense, class Lhs, class Rhs, class Dest>
+void multiply(const Lhs& L, const Rhs& R, Dest&& C, double alpha, bool accumulate) {
+  static_assert(LhsShape == Shape::dense || RhsShape == Shape::dense, "at most one triangular operand");
   const Eigen::Index m = L.rows(), k = L.cols(), n = R.cols();
   C.resize(m, n);  // (the three-product path writes through a Ref, which cannot resize)
-  if (std::min({m, n, k}) < kThreeProductMinSize) {
-    if (alpha == 1.0 && accumulate) {
-      C.noalias() += L * R;
-    } else if (alpha == 1.0) {
-      C.noalias() = L * R;
-    } else if (alpha == -1.0 && accumulate) {
-      C.noalias() -= L * R;
-    } else if (alpha == -1.0) {
-      C.noalias() = -L * R;
-    } else if (accumulate) {
-      C.noalias() += std::complex<double>(alpha) * (L * R);
-    } else {
-      C.noalias() = std::complex<double>(alpha) * (L * R);
-    }
-    return;
+  if (std::min({m, n, k}) < kThreeProductMinSize) return multiply_as_given(L, R, C, alpha, accumulate);
+  if constexpr (LhsShape != Shape::dense || RhsShape != Shape::dense) {
+    if (std::min({m, n, k}) < kTriangularShapeMinSize) return multiply(L, R, C, alpha, accumulate);
   }
-  double* scratch = product_scratch(static_cast<std::size_t>(2 * (m * k + k * n + m * n)));
-  RealMap a(scratch, m, k), b(a.data() + a.size(), m, k);
-  RealMap c(b.data() + b.size(), k, n), d(c.data() + c.size(), k, n);
-  RealMap t1(d.data() + d.size(), m, n), t2(t1.data() + t1.size(), m, n);
-  a = L.real();
-  b = L.imag();
-  c = R.real();
-  d = R.imag();
-  three_real_products(a, b, c, d, t1, t2, C, alpha, accumulate);
+  if constexpr (!Eigen::NumTraits<typename Lhs::Scalar>::IsComplex) {
+    if constexpr (LhsShape == Shape::dense && RhsShape == Shape::dense) {
+      multiply_as_given(L, R, C, alpha, accumulate);
+    } else {
+      multiply_real_triangular<LhsShape, RhsShape>(L, R, C, alpha, accumulate);
+    }
+  } else {
+    double* scratch = product_scratch(static_cast<std::size_t>(2 * (m * k + k * n + m * n)));
+    RealMap a(scratch, m, k), b(a.data() + a.size(), m, k);
+    RealMap c(b.data() + b.size(), k, n), d(c.data() + c.size(), k, n);
+    RealMap t1(d.data() + d.size(), m, n), t2(t1.data() + t1.size(), m, n);
+    a = L.real();
+    b = L.imag();
+    c = R.real();
+    d = R.imag();
+    three_real_products<LhsShape, RhsShape>(a, b, c, d, t1, t2, C, alpha, accumulate);
+  }
 }
 
 }  // namespace fact::sdp::detail

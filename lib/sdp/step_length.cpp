@@ -287,8 +287,8 @@ EIGEN_DONT_INLINE void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd
 }
 
 // L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
-// zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products that
-// treat the triangular factors as dense (n³/3 multiply-adds in all against n³/6, at product speed).
+// zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products with a
+// triangular factor (multiply: Eigen's triangular product, or three of them when complex).
 // The diagonal of L is real and positive (a Cholesky factor): divisions are by its real part.
 template <class Scalar>
 void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> L,
@@ -315,14 +315,9 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
   invert_lower<Scalar>(L.topLeftCorner(k, k), inverse.topLeftCorner(k, k));
   invert_lower<Scalar>(L.bottomRightCorner(m, m), inverse.bottomRightCorner(m, m));
   inverse.topRightCorner(k, m).setZero();
-  if constexpr (std::is_same_v<Scalar, double>) {
-    const Eigen::MatrixXd BA = L.bottomLeftCorner(m, k) * inverse.topLeftCorner(k, k);  // B A⁻¹, m × k
-    inverse.bottomLeftCorner(m, k).noalias() = -inverse.bottomRightCorner(m, m) * BA;
-  } else {
-    Eigen::MatrixXcd BA(m, k);  // B A⁻¹
-    multiply_complex(L.bottomLeftCorner(m, k), inverse.topLeftCorner(k, k), BA, 1.0, false);
-    multiply_complex(inverse.bottomRightCorner(m, m), BA, inverse.bottomLeftCorner(m, k), -1.0, false);
-  }
+  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> BA(m, k);  // B A⁻¹ (A⁻¹, C⁻¹ lower triangular, zeros above)
+  multiply<Shape::dense, Shape::lower>(L.bottomLeftCorner(m, k), inverse.topLeftCorner(k, k), BA, 1.0, false);
+  multiply<Shape::lower>(inverse.bottomRightCorner(m, m), BA, inverse.bottomLeftCorner(m, k), -1.0, false);
 }
 
 // Below this size W = Gᴴ G is one dense product (G lower triangular); above it the recursion.
@@ -331,31 +326,22 @@ constexpr Eigen::Index kGramBlock = 32;
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
 // (both triangles). With G = [A 0; B C] (A k × k and C m × m lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
-// the diagonal blocks by recursion, the rest by dense products: about n³/3 multiply-adds against
-// n³ for the product of the dense matrices.
+// the diagonal blocks by recursion, the rest by products (Cᴴ B with Cᴴ triangular): about n³/3
+// multiply-adds against n³ for the product of the dense matrices.
 template <class Scalar>
 void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> G,
                    Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> W) {
   const Eigen::Index n = G.rows();
   if (n <= kGramBlock) {
-    if constexpr (std::is_same_v<Scalar, double>) {
-      W.noalias() = G.transpose() * G;
-    } else {
-      multiply_complex(G.adjoint(), G, W, 1.0, false);
-    }
+    multiply(G.adjoint(), G, W, 1.0, false);
     return;
   }
   const Eigen::Index k = n / 2, m = n - k;
   gram_of_lower<Scalar>(G.topLeftCorner(k, k), W.topLeftCorner(k, k));
   gram_of_lower<Scalar>(G.bottomRightCorner(m, m), W.bottomRightCorner(m, m));
-  if constexpr (std::is_same_v<Scalar, double>) {
-    W.topLeftCorner(k, k).noalias() += G.bottomLeftCorner(m, k).transpose() * G.bottomLeftCorner(m, k);  // + Bᵀ B
-    W.bottomLeftCorner(m, k).noalias() = G.bottomRightCorner(m, m).transpose() * G.bottomLeftCorner(m, k);  // Cᵀ B
-  } else {
-    const auto B = G.bottomLeftCorner(m, k);
-    multiply_complex(B.adjoint(), B, W.topLeftCorner(k, k), 1.0, true);                          // + Bᴴ B
-    multiply_complex(G.bottomRightCorner(m, m).adjoint(), B, W.bottomLeftCorner(m, k), 1.0, false);  // Cᴴ B
-  }
+  const auto B = G.bottomLeftCorner(m, k);
+  multiply(B.adjoint(), B, W.topLeftCorner(k, k), 1.0, true);                                          // + Bᴴ B
+  multiply<Shape::upper>(G.bottomRightCorner(m, m).adjoint(), B, W.bottomLeftCorner(m, k), 1.0, false);  // Cᴴ B
   W.topRightCorner(k, m) = W.bottomLeftCorner(m, k).adjoint();
 }
 
@@ -369,7 +355,7 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
-  // Products by three real ones (multiply_complex) give a Gram block whose (i, j) and (j, i)
+  // Products by three real ones (multiply) give a Gram block whose (i, j) and (j, i)
   // entries differ in the last bits and a diagonal with a rounding-sized imaginary part: W is made
   // Hermitian from its lower triangle (its readers take either triangle).
   W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
