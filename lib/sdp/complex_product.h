@@ -27,13 +27,14 @@ namespace fact::sdp::detail {
 constexpr Eigen::Index kThreeProductMinSize = 16;
 
 // Where an operand's entries may be nonzero: anywhere, or on and below (lower) or on and above
-// (upper) its diagonal, the rest zero. A triangular operand's three real products go through
-// Eigen's triangular product, which skips the zero triangle: 0.56–0.62 of a dense product's time
-// at n = 100 … 200 on the AVX2 machine (BENCHMARKS.md, session 36).
+// (upper) its diagonal, the rest zero. A product with a triangular operand (real: one, complex:
+// its three real ones) goes through Eigen's triangular product, which skips the zero triangle:
+// real 0.65 / 0.62 / 0.56, complex 0.72 / 0.68 / 0.64 of a dense product's time at n = 100 / 128 /
+// 200 on the AVX2 machine (BENCHMARKS.md, session 36).
 enum class Shape { dense, lower, upper };
 // Below this, in any dimension, a triangular operand is multiplied as a dense one: Eigen's
 // triangular product was 1.6× slower than the dense one on 16 × 16 blocks (inverse of n = 32),
-// as fast on 24 and 32, faster from 50 (BENCHMARKS.md, session 36).
+// as fast on 24 × 24 and 32 × 32 (n = 48, 64), faster from 50 (BENCHMARKS.md, session 36).
 constexpr Eigen::Index kTriangularShapeMinSize = 40;
 
 // The calling thread's scratch for the split operands: at least `count` doubles, grown to the

@@ -326,8 +326,9 @@ constexpr Eigen::Index kGramBlock = 32;
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
 // (both triangles). With G = [A 0; B C] (A k × k and C m × m lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
-// the diagonal blocks by recursion, the rest by products (Cᴴ B with Cᴴ triangular): about n³/3
-// multiply-adds against n³ for the product of the dense matrices.
+// the diagonal blocks by recursion, the rest by products: about n³/3 multiply-adds against n³ for
+// the product of the dense matrices, n³/4 once Cᴴ B goes through the triangular product (blocks
+// of kTriangularShapeMinSize rows and more).
 template <class Scalar>
 void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> G,
                    Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> W) {
