@@ -11,31 +11,11 @@ double* product_scratch(std::size_t count) {
   return buffer.data();
 }
 
-namespace {
-
-// t = l·r, through Eigen's triangular product when l or r is triangular.
-template <Shape LhsShape, Shape RhsShape>
-void real_product(const RealMap& l, const RealMap& r, RealMap& t) {
-  if constexpr (LhsShape == Shape::lower) {
-    t.noalias() = l.triangularView<Eigen::Lower>() * r;
-  } else if constexpr (LhsShape == Shape::upper) {
-    t.noalias() = l.triangularView<Eigen::Upper>() * r;
-  } else if constexpr (RhsShape == Shape::lower) {
-    t.noalias() = l * r.triangularView<Eigen::Lower>();
-  } else if constexpr (RhsShape == Shape::upper) {
-    t.noalias() = l * r.triangularView<Eigen::Upper>();
-  } else {
-    t.noalias() = l * r;
-  }
-}
-
-}  // namespace
-
 template <Shape LhsShape, Shape RhsShape>
 void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1, RealMap t2,
                          Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> C, double alpha, bool accumulate) {
-  real_product<LhsShape, RhsShape>(a, c, t1);  // ac
-  real_product<LhsShape, RhsShape>(b, d, t2);  // bd
+  t1.noalias() = shaped_product<LhsShape, RhsShape>(a, c);  // ac
+  t2.noalias() = shaped_product<LhsShape, RhsShape>(b, d);  // bd
   if (accumulate) {
     C.real() += alpha * (t1 - t2);
   } else {
@@ -44,7 +24,7 @@ void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1,
   t1 += t2;  // ac + bd
   a += b;
   c += d;
-  real_product<LhsShape, RhsShape>(a, c, t2);  // (a + b)(c + d)
+  t2.noalias() = shaped_product<LhsShape, RhsShape>(a, c);  // (a + b)(c + d)
   if (accumulate) {
     C.imag() += alpha * (t2 - t1);
   } else {

@@ -49,48 +49,46 @@ template <Shape LhsShape, Shape RhsShape>
 void three_real_products(RealMap a, RealMap b, RealMap c, RealMap d, RealMap t1, RealMap t2,
                          Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> C, double alpha, bool accumulate);
 
-// C = α·L·R, or C += α·L·R with accumulate, by Eigen's product of L and R as given (on small
-// blocks Eigen multiplies coefficient by coefficient, and α = ±1 is written as a sum or
-// difference so that it keeps that path).
-template <class Lhs, class Rhs, class Dest>
-void multiply_as_given(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accumulate) {
-  using Scalar = typename std::decay_t<Dest>::Scalar;
-  if (alpha == 1.0 && accumulate) {
-    C.noalias() += L * R;
-  } else if (alpha == 1.0) {
-    C.noalias() = L * R;
-  } else if (alpha == -1.0 && accumulate) {
-    C.noalias() -= L * R;
-  } else if (alpha == -1.0) {
-    C.noalias() = -L * R;
-  } else if (accumulate) {
-    C.noalias() += Scalar(alpha) * (L * R);
+// Eigen's product expression of L and R for their shapes: a triangular operand's product goes
+// through Eigen's triangular product, which skips its zero triangle.
+template <Shape LhsShape, Shape RhsShape, class Lhs, class Rhs>
+auto shaped_product(const Lhs& L, const Rhs& R) {
+  static_assert(LhsShape == Shape::dense || RhsShape == Shape::dense, "at most one triangular operand");
+  if constexpr (LhsShape == Shape::lower) {
+    return L.template triangularView<Eigen::Lower>() * R;
+  } else if constexpr (LhsShape == Shape::upper) {
+    return L.template triangularView<Eigen::Upper>() * R;
+  } else if constexpr (RhsShape == Shape::lower) {
+    return L * R.template triangularView<Eigen::Lower>();
+  } else if constexpr (RhsShape == Shape::upper) {
+    return L * R.template triangularView<Eigen::Upper>();
   } else {
-    C.noalias() = Scalar(alpha) * (L * R);
+    return L * R;
   }
 }
 
-// C = α·L·R, or C += α·L·R, for real L and R, one of them triangular (shape), by Eigen's
-// triangular product.
+// C = α·L·R, or C += α·L·R with accumulate, by shaped_product. α = ±1 is written as a sum or
+// difference, or a product with −L, which Eigen folds into its kernel's factor: no temporary,
+// and small blocks keep Eigen's coefficient-by-coefficient product. Any other α (only the
+// tests') goes through the evaluated product, since a triangular product has no scalar multiple.
 template <Shape LhsShape, Shape RhsShape, class Lhs, class Rhs, class Dest>
-void multiply_real_triangular(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accumulate) {
-  constexpr unsigned mode = (LhsShape == Shape::lower || RhsShape == Shape::lower) ? Eigen::Lower : Eigen::Upper;
-  if (!accumulate) C.setZero();
-  if constexpr (LhsShape != Shape::dense) {
-    if (alpha == 1.0) {
-      C.noalias() += L.template triangularView<mode>() * R;
-    } else if (alpha == -1.0) {
-      C.noalias() -= L.template triangularView<mode>() * R;
-    } else {
-      C += alpha * Eigen::MatrixXd(L.template triangularView<mode>() * R);
-    }
+void assign_product(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accumulate) {
+  using Scalar = typename std::decay_t<Dest>::Scalar;
+  if (alpha == 1.0 && accumulate) {
+    C.noalias() += shaped_product<LhsShape, RhsShape>(L, R);
+  } else if (alpha == 1.0) {
+    C.noalias() = shaped_product<LhsShape, RhsShape>(L, R);
+  } else if (alpha == -1.0 && accumulate) {
+    C.noalias() -= shaped_product<LhsShape, RhsShape>(L, R);
+  } else if (alpha == -1.0) {
+    C.noalias() = shaped_product<LhsShape, RhsShape>(-L, R);
   } else {
-    if (alpha == 1.0) {
-      C.noalias() += L * R.template triangularView<mode>();
-    } else if (alpha == -1.0) {
-      C.noalias() -= L * R.template triangularView<mode>();
+    using Product = decltype(shaped_product<LhsShape, RhsShape>(L, R));
+    const typename Product::PlainObject product = shaped_product<LhsShape, RhsShape>(L, R);
+    if (accumulate) {
+      C += Scalar(alpha) * product;
     } else {
-      C += alpha * Eigen::MatrixXd(L * R.template triangularView<mode>());
+      C = Scalar(alpha) * product;
     }
   }
 }
@@ -105,19 +103,14 @@ void multiply_real_triangular(const Lhs& L, const Rhs& R, Dest& C, double alpha,
 // triangular product.
 template <Shape LhsShape = Shape::dense, Shape RhsShape = Shape::dense, class Lhs, class Rhs, class Dest>
 void multiply(const Lhs& L, const Rhs& R, Dest&& C, double alpha, bool accumulate) {
-  static_assert(LhsShape == Shape::dense || RhsShape == Shape::dense, "at most one triangular operand");
   const Eigen::Index m = L.rows(), k = L.cols(), n = R.cols();
   C.resize(m, n);  // (the three-product path writes through a Ref, which cannot resize)
-  if (std::min({m, n, k}) < kThreeProductMinSize) return multiply_as_given(L, R, C, alpha, accumulate);
+  if (std::min({m, n, k}) < kThreeProductMinSize) return assign_product<Shape::dense, Shape::dense>(L, R, C, alpha, accumulate);
   if constexpr (LhsShape != Shape::dense || RhsShape != Shape::dense) {
     if (std::min({m, n, k}) < kTriangularShapeMinSize) return multiply(L, R, C, alpha, accumulate);
   }
   if constexpr (!Eigen::NumTraits<typename Lhs::Scalar>::IsComplex) {
-    if constexpr (LhsShape == Shape::dense && RhsShape == Shape::dense) {
-      multiply_as_given(L, R, C, alpha, accumulate);
-    } else {
-      multiply_real_triangular<LhsShape, RhsShape>(L, R, C, alpha, accumulate);
-    }
+    assign_product<LhsShape, RhsShape>(L, R, C, alpha, accumulate);
   } else {
     double* scratch = product_scratch(static_cast<std::size_t>(2 * (m * k + k * n + m * n)));
     RealMap a(scratch, m, k), b(a.data() + a.size(), m, k);
