@@ -195,9 +195,13 @@ TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
 
 // The complex interior point on H (the Hermitian form of complex_form(noisy plain cost), scaled):
 // its X is Hermitian PSD with unit diagonal, S = H − diag(y) is PSD, the gap is below the
-// tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H).
+// tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H). N = 80 takes the
+// large-N paths: triangular products in Lz⁻¹, its Gram and the accurate direction (blocks of
+// kTriangularShapeMinSize = 40 rows and more), the triangular dual-step operator
+// (kTriangularProductMinSize = 64) and the primal step through triangular solves (N > 64).
 TEST(SdpComplexInteriorPoint, ConvergesToTheRealInteriorPointsOptimumWithAFeasibleDual) {
-  for (int drones : {6, 12, 24}) {
+  static_assert(fact::sdp::detail::kTriangularShapeMinSize <= 40 && fact::sdp::detail::kTriangularProductMinSize < 80);
+  for (int drones : {6, 12, 24, 80}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
     const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 3));
     const Eigen::MatrixXd C = C0 / C0.norm();
@@ -543,7 +547,7 @@ TEST(SdpKernels, MultiplyComplexMatchesEigensProduct) {
 // multiply with a triangular operand (Shape::lower or Shape::upper, zeros outside the triangle)
 // against Eigen's product of the dense matrices, real and complex: lower and upper on either side,
 // a block of a lower-triangular matrix and its adjoint (the inverse and Gram kernels' operands),
-// below, at and above kThreeProductMinSize and kTriangularShapeMinSize, assigned and accumulated, α = 1, −1 and −0.75. With
+// into a matrix and (lower · dense) into a block of a larger one (their destinations), below, at and above kThreeProductMinSize and kTriangularShapeMinSize, assigned and accumulated, α = 1, −1 and −0.75. With
 // the wrong triangle the product misses half of the operand's entries.
 template <class Matrix>
 void expect_triangular_products_match(std::mt19937& rng) {
@@ -574,6 +578,15 @@ void expect_triangular_products_match(std::mt19937& rng) {
           Matrix C = start;
           multiply<Shape::lower>(T, R, C, alpha, accumulate);
           EXPECT_LT((C - expected(t_lower * R, start)).norm(), tol) << "lower · dense";
+          // into a block of a larger matrix (the inverse and Gram kernels' destinations): the
+          // entries around it stay as they were
+          Matrix C_store = fact::test::gaussian_matrix<Matrix>(k + 4, other + 3, rng, gauss);
+          C_store.block(2, 1, k, other) = start;
+          const Matrix store_before = C_store;
+          multiply<Shape::lower>(T, R, C_store.block(2, 1, k, other), alpha, accumulate);
+          EXPECT_LT((C_store.block(2, 1, k, other) - expected(t_lower * R, start)).norm(), tol) << "lower · dense, block";
+          C_store.block(2, 1, k, other) = start;
+          EXPECT_EQ(C_store, store_before) << "lower · dense wrote outside its block";
           C = start;
           multiply<Shape::upper>(T.adjoint(), R, C, alpha, accumulate);
           EXPECT_LT((C - expected(t_upper * R, start)).norm(), tol) << "upper · dense";
@@ -590,6 +603,43 @@ TEST(SdpKernels, MultiplyWithATriangularOperandMatchesEigensProduct) {
   std::mt19937 rng(41);
   expect_triangular_products_match<Eigen::MatrixXd>(rng);
   expect_triangular_products_match<Eigen::MatrixXcd>(rng);
+}
+
+// From kTriangularShapeMinSize rows a triangular operand goes through Eigen's triangular product,
+// which never reads the other triangle: with NaN there the product is still exact (real, and
+// complex through its three real products). Below it the operand is multiplied as a dense one,
+// and the NaN comes through; a path that fell back to the dense product would too.
+template <class Matrix>
+void expect_other_triangle_unread(std::mt19937& rng) {
+  using fact::sdp::detail::multiply;
+  using fact::sdp::detail::Shape;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  constexpr Eigen::Index s = fact::sdp::detail::kTriangularShapeMinSize;
+  for (const Eigen::Index k : {s - 1, s, Eigen::Index{101}}) {
+    SCOPED_TRACE(testing::Message() << "k " << k);
+    const Matrix lower = Matrix(fact::test::gaussian_matrix<Matrix>(k, k, rng, gauss).template triangularView<Eigen::Lower>());
+    Matrix poisoned = lower;  // lower, with NaN above the diagonal
+    poisoned.template triangularView<Eigen::StrictlyUpper>().setConstant(std::numeric_limits<double>::quiet_NaN());
+    const Matrix R = fact::test::gaussian_matrix<Matrix>(k, k + 2, rng, gauss);
+    const Matrix L = fact::test::gaussian_matrix<Matrix>(k + 2, k, rng, gauss);
+    Matrix C, D;
+    multiply<Shape::lower>(poisoned, R, C, 1.0, false);
+    multiply<Shape::dense, Shape::upper>(L, poisoned.adjoint(), D, -1.0, false);
+    if (k < s) {
+      EXPECT_FALSE(C.allFinite());
+      EXPECT_FALSE(D.allFinite());
+      continue;
+    }
+    const double tol = 1e-14 * lower.norm() * R.norm();
+    EXPECT_LT((C - lower * R).norm(), tol);
+    EXPECT_LT((D + L * lower.adjoint()).norm(), tol);
+  }
+}
+
+TEST(SdpKernels, FromTheThresholdATriangularOperandsOtherTriangleIsNotRead) {
+  std::mt19937 rng(43);
+  expect_other_triangle_unread<Eigen::MatrixXd>(rng);
+  expect_other_triangle_unread<Eigen::MatrixXcd>(rng);
 }
 
 // The dual step-length operator w = Lz⁻¹ ΔZ Lz⁻ᴴ v (ΔZ = −diag(dy)) against the dense formula, on
