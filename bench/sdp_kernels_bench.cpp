@@ -20,6 +20,7 @@
 
 #include "common/cli_checks.h"
 #include "complex_product.h"
+#include "gaussian_matrix.h"
 #include "internal.h"
 #include "results_file.h"
 #include "stats.h"
@@ -60,19 +61,11 @@ std::vector<double> time_calls(int reps, Run run) {
   return us;
 }
 
+// A rows × cols operand of standard Gaussian entries, from a distribution of its own.
 template <class Matrix>
 Matrix random_matrix(Eigen::Index rows, Eigen::Index cols, std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Matrix m(rows, cols);
-  for (Eigen::Index j = 0; j < cols; ++j)
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      if constexpr (Eigen::NumTraits<typename Matrix::Scalar>::IsComplex) {
-        m(i, j) = {gauss(rng), gauss(rng)};
-      } else {
-        m(i, j) = gauss(rng);
-      }
-    }
-  return m;
+  return fact::bench::gaussian_matrix<Matrix>(rows, cols, rng, gauss);
 }
 
 double relative(double error, double scale) { return error / std::max(scale, 1e-300); }

@@ -3,13 +3,12 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <complex>
 #include <cstdint>
 #include <random>
-#include <type_traits>
 
 #include "fact/rotation_cost.h"
 #include "fact/simgen.h"
+#include "gaussian_matrix.h"
 
 namespace fact::test {
 
@@ -24,21 +23,8 @@ inline Eigen::MatrixXd noisy_plain_cost(int drones, std::uint64_t seed) {
   return paper_cost(make_synthetic_rounds(o).sums);
 }
 
-// A matrix of standard Gaussian entries (rows × cols), real or complex (each entry's real part,
-// then its imaginary part), drawn column by column from rng through gauss.
-template <class Matrix>
-Matrix gaussian_matrix(Eigen::Index rows, Eigen::Index cols, std::mt19937& rng, std::normal_distribution<double>& gauss) {
-  Matrix B(rows, cols);
-  for (Eigen::Index j = 0; j < cols; ++j)
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      if constexpr (std::is_same_v<typename Matrix::Scalar, double>) {
-        B(i, j) = gauss(rng);
-      } else {
-        const double re = gauss(rng);
-        B(i, j) = {re, gauss(rng)};
-      }
-    }
-  return B;
-}
+// A matrix of standard Gaussian entries (bench/gaussian_matrix.h; the kernel benchmark draws its
+// operands with it too).
+using fact::bench::gaussian_matrix;
 
 }  // namespace fact::test
