@@ -103,6 +103,9 @@ void assign_product(const Lhs& L, const Rhs& R, Dest& C, double alpha, bool accu
 // triangular product.
 template <Shape LhsShape = Shape::dense, Shape RhsShape = Shape::dense, class Lhs, class Rhs, class Dest>
 void multiply(const Lhs& L, const Rhs& R, Dest&& C, double alpha, bool accumulate) {
+  // (also asserted in shaped_product; here it fails at compile time on the complex path too,
+  // whose three_real_products is instantiated in complex_product.cpp)
+  static_assert(LhsShape == Shape::dense || RhsShape == Shape::dense, "at most one triangular operand");
   const Eigen::Index m = L.rows(), k = L.cols(), n = R.cols();
   C.resize(m, n);  // (the three-product path writes through a Ref, which cannot resize)
   if (std::min({m, n, k}) < kThreeProductMinSize) return assign_product<Shape::dense, Shape::dense>(L, R, C, alpha, accumulate);
