@@ -287,6 +287,71 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
   EXPECT_NEAR(warm.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
 }
 
+// Dual scaling from y = −2·1 with X = I's objective as the upper bound, handed off at a relative
+// gap of 1e-3: X Hermitian positive definite with unit diagonal, H − diag(y) positive definite,
+// the gap between Re tr(H X) and Σ y positive and below 1e-3 (relative), and the primal–dual
+// method resumed from the pair ends at the optimum of a cold primal–dual run. N = 80 takes the
+// triangular paths of the inverse, the Gram and the dual step's operator.
+TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
+  for (int drones : {5, 32, 80}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
+    const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+    const Options o;
+    const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
+      return (H.array() * ip.X.array().conjugate()).real().sum();
+    };
+    const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(drones, -2.0);
+    const ComplexInteriorPointOutcome scaled =
+        fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, y0, H.diagonal().real().sum());
+    ASSERT_TRUE(scaled.handed_off) << scaled.reason;
+    EXPECT_FALSE(scaled.converged);
+    EXPECT_GT(scaled.iterations, 1);
+    EXPECT_LT((scaled.X - scaled.X.adjoint()).norm(), 1e-12);
+    EXPECT_LT((scaled.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(scaled.X).info(), Eigen::Success);
+    Eigen::MatrixXcd Z = H;  // H − diag(y), N × N
+    Z.diagonal() -= scaled.y.cast<std::complex<double>>();
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(Z).info(), Eigen::Success);
+    const double gap = objective(scaled) - scaled.y.sum();
+    EXPECT_GT(gap, 0.0);
+    EXPECT_LT(gap / std::max(0.5e-4, std::abs(objective(scaled))), 1e-3);
+
+    const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
+    const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &scaled);
+    ASSERT_TRUE(cold.converged) << cold.reason;
+    ASSERT_TRUE(rest.converged) << rest.reason;
+    EXPECT_GT(rest.iterations, scaled.iterations);  // the resumed run counts dual scaling's iterations
+    EXPECT_NEAR(objective(rest), objective(cold), 1e-9 * std::abs(objective(cold)));
+    EXPECT_NEAR(rest.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
+  }
+}
+
+// Dual scaling refuses an infeasible start, and gives up, with no X and neither flag, when no
+// primal point can beat its upper bound (here the optimum itself).
+TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
+  const int drones = 24;
+  const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
+  const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+  const Options o;
+  const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(drones, -2.0);
+
+  const ComplexInteriorPointOutcome infeasible =
+      fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, Eigen::VectorXd::Constant(drones, 2.0), 1.0);
+  EXPECT_FALSE(infeasible.handed_off || infeasible.converged);
+  EXPECT_EQ(infeasible.X.size(), 0);
+  EXPECT_NE(infeasible.reason.find("not positive definite"), std::string::npos) << infeasible.reason;
+
+  const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
+  ASSERT_TRUE(cold.converged) << cold.reason;
+  const double optimum = (H.array() * cold.X.array().conjugate()).real().sum();
+  const ComplexInteriorPointOutcome stuck = fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, y0, optimum);
+  EXPECT_FALSE(stuck.handed_off || stuck.converged);
+  EXPECT_EQ(stuck.X.size(), 0);
+  EXPECT_LT(stuck.iterations, o.max_ipm_iterations);
+  EXPECT_NE(stuck.reason.find("no better primal point"), std::string::npos) << stuck.reason;
+}
+
 // Z (n × n, Hermitian positive definite: B Bᴴ + n I for a Gaussian B), its factor L, L⁻¹ by
 // invert_lower_factor and W by gram_of_lower_factor: L⁻¹ lower triangular with L⁻¹ L = I, and
 // W = L⁻ᴴ L⁻¹ = Z⁻¹, Hermitian and equal to the dense product to rounding.

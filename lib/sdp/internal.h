@@ -538,6 +538,16 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
                                                          double handoff_gap,
                                                          const ComplexInteriorPointOutcome* resume = nullptr);
 
+// Dual scaling on the same problem (complex_dual_scaling.cpp): Newton steps for the dual barrier
+// from y0 (H − diag(y0) ≻ 0), with upper_bound the objective of some feasible X (the staircase's
+// factor), stopping once the relative gap is below handoff_gap (handed_off) or gap_tol
+// (converged). X is its best primal point (positive definite, unit diagonal) and y its last
+// dual iterate, a strictly feasible pair the primal–dual method can resume from; without a primal
+// point (none found better than upper_bound) X is empty and neither flag is set.
+ComplexInteriorPointOutcome solve_complex_dual_scaling(const Eigen::MatrixXcd& H, const Options& options,
+                                                       double handoff_gap, const Eigen::VectorXd& y0,
+                                                       double upper_bound);
+
 // A strictly feasible start for the complex interior point from a factor Y (N × p, unit rows) of
 // a point near the optimum (the staircase's last level, which did not certify):
 // X = (1 − mix)·Y Yᴴ + mix·I (unit diagonal, positive definite for mix > 0) and y = μ(Y) − s·1, with

@@ -300,18 +300,29 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
 // The complex interior point on H (complex form, automatic mode), started from the staircase's
 // factor staircase_Y (2N × 2p, real form; complex_interior_start with kInteriorStartMix; X = I and
 // y = −2 when that finds no dual shift or the warm start stalls), handed to complex Newton at
-// kComplexHandoffGap and, when that does not certify, resumed and run to convergence. Its dual y
+// kComplexHandoffGap and, when that does not certify, resumed and run to convergence. With a warm
+// start, dual scaling (complex_dual_scaling.cpp) takes the first part, to the hand-off, from its
+// dual y and with its X's objective as the upper bound; the primal–dual method only when dual
+// scaling gives up, and to resume. Dual scaling to the hand-off, against the primal–dual method
+// from the same start: 0.57 … 0.88 of the solve's time at N = 32 … 200, neutral below (where the
+// staircase mostly certifies), the same statuses and optima (BENCHMARKS.md, session 37). Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
 // rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
 Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o, const Eigen::MatrixXd& staircase_Y) {
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexInteriorPointOutcome start;
-  const bool warm = staircase_Y.size() > 0 &&
-                    detail::complex_interior_start(H, detail::complex_of_real_factor(staircase_Y),
-                                                   kInteriorStartMix, start);
-  detail::ComplexInteriorPointOutcome ip =
-      detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
+  const Eigen::MatrixXcd Y = staircase_Y.size() > 0 ? detail::complex_of_real_factor(staircase_Y) : Eigen::MatrixXcd();
+  const bool warm = Y.size() > 0 && detail::complex_interior_start(H, Y, kInteriorStartMix, start);
+  detail::ComplexInteriorPointOutcome ip;
+  if (warm)  // upper bound: the objective of the primal–dual method's warm start X
+    ip = detail::solve_complex_dual_scaling(H, o, kComplexHandoffGap, start.y,
+                                            (H.array() * start.X.array().conjugate()).real().sum());
+  if (!ip.handed_off && !ip.converged) {  // no start, or dual scaling gave up: the primal–dual method
+    const int wasted = ip.iterations;
+    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
+    ip.iterations += wasted;
+  }
   if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (4 of 240 sweep instances,
     const int wasted = ip.iterations;              // N = 27 … 100, near a relative gap of 1): start cold
     ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);

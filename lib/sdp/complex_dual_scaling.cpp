@@ -1,0 +1,175 @@
+// Dual scaling for the complex form (S. J. Benson, Y. Ye and X. Zhang, "Solving large-scale sparse
+// semidefinite programs for combinatorial optimization", SIAM J. Optim. 10(2), 2000; the method
+// of DSDP):  min Re tr(H X)  s.t.  X_ii = 1,  X ⪰ 0  (H Hermitian N × N), dual  max Σ y_i  s.t.
+// Z = H − diag(y) ⪰ 0.
+//
+// Each iteration is a Newton step for the dual barrier  max Σ y/μ + ln det Z  from a strictly
+// feasible y: with W = Z⁻¹ (N × N Hermitian) and M = |W|∘² (M_ij = |W_ij|², N × N real symmetric,
+// the barrier's Hessian), M Δy = 1/μ − diag W, i.e. Δy = Δy₁/μ − Δy₂ with M Δy₁ = 1 and
+// M Δy₂ = diag W. The same step gives a primal point for free:
+//     X(μ) = μ (W + W diag(Δy) W) = μ W (Z + diag(Δy)) W
+// has X_ii = 1 by construction, is ⪰ 0 exactly when Z + diag(Δy) is (one Cholesky test), and its
+// objective is Σ y + μ (N + Δyᵀ diag W), an O(N) sum. The primal iterate is never formed: only its
+// objective, the upper bound z̄ the next μ = (z̄ − Σ y)/ρ comes from, until X is needed at the end.
+//
+// Against the primal–dual interior point (complex_interior_point.cpp) an iteration has no N × N
+// products (that method's two P·W products were 55 % of a tight_noisy N = 200 solve): the
+// inverse and Gram of Z's factor, the N × N real Schur factor, two Cholesky tests and a Lanczos
+// estimate. It takes more iterations to the hand-off (14–27 against 11–15 on tight_noisy N = 32 …
+// 200) at about a third of the cost each; X is formed once, at the end (BENCHMARKS.md, session 37).
+//
+// The upper bound matters: started from the staircase's own objective, close to the optimum, μ
+// settled near (z̄ − optimum)/2N on 3 of 42 sweep instances while every primal test failed
+// (80 iterations); from the objective of the primal–dual warm start's X = 0.35·Y Yᴴ + 0.65·I,
+// looser, all 42 handed off within 27 iterations.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "complex_product.h"
+#include "internal.h"
+#include "spd_solver.h"
+#include "step_length.h"
+
+namespace fact::sdp::detail {
+namespace {
+
+using Eigen::MatrixXcd;
+using Eigen::MatrixXd;
+using Eigen::VectorXcd;
+using Eigen::VectorXd;
+
+// ρ = kPotentialWeight·N in μ = (z̄ − Σ y)/ρ: DSDP's potential parameter. tight_noisy N = 100:
+// 26 / 22 / 22 / 24 / 30 iterations to a relative gap of 1e-3 with 1.5 / 2 / 3 / 5 / 8 (session 37).
+constexpr double kPotentialWeight = 3.0;
+// Lanczos steps for the dual step length, as the primal–dual corrector's (kLanczosSteps there).
+constexpr int kDualLanczosSteps = 8;
+constexpr double kStepFraction = 0.95;
+// Iterations without a better primal point after which the method gives up (the caller then runs
+// the primal–dual method): before the first one, and between two. A guard only: with the loose
+// upper bound solve() gives, each of the 42 sweep instances (N = 32 … 200) handed off before it.
+constexpr int kFirstPrimalWait = 10;
+constexpr int kPrimalWait = 10;
+
+// Every matrix of one iteration, allocated once.
+struct Workspace {
+  explicit Workspace(Eigen::Index N)
+      : L(N, N), trial(N, N), L_inv(N, N), W(N, N), best_W(N, N), M(N, N), schur(N), u(N), dw(N), dy1(N), dy2(N),
+        dy(N), d(N), best_d(N), y_trial(N) {}
+  MatrixXcd L;      // Z = L Lᴴ, lower triangle (N × N)
+  MatrixXcd trial;  // a Cholesky test's matrix, then its factor (N × N)
+  MatrixXcd L_inv;  // L⁻¹, lower triangular (N × N)
+  MatrixXcd W;      // Z⁻¹ (N × N Hermitian)
+  MatrixXcd best_W;  // W at the best primal point so far (N × N)
+  MatrixXd M;        // |W|∘², the dual barrier's Hessian (N × N real)
+  SpdSolver schur;   // M factored
+  VectorXcd u;       // Lanczos scratch (N)
+  VectorXd dw, dy1, dy2, dy, d, best_d, y_trial;  // diag W, M⁻¹1, M⁻¹ diag W, the dual step, Δy(μ), N each
+};
+
+// Z = H − diag(y) factored into `factor` (its lower triangle); false when not positive definite.
+bool factor_slack(const MatrixXcd& H, const VectorXd& y, MatrixXcd& factor) {
+  factor = H;
+  factor.diagonal() -= y.cast<std::complex<double>>();
+  return cholesky_in_place(factor);
+}
+
+}  // namespace
+
+ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const Options& options, double handoff_gap,
+                                                       const VectorXd& y0, double upper_bound) {
+  const Eigen::Index N = H.rows();
+  ComplexInteriorPointOutcome out;
+  Workspace ws(N);
+  VectorXd y = y0;
+  if (!factor_slack(H, y, ws.L)) {
+    out.reason = "dual scaling: H − diag(y₀) is not positive definite";
+    return out;
+  }
+  double z_bar = upper_bound;  // the objective of a feasible X: the best found, or the caller's
+  double best_mu = 0;          // X(best_mu) with best_d, best_W is the primal point of z_bar
+  bool have_primal = false;
+  const double rho = kPotentialWeight * static_cast<double>(N);
+  int waited = 0;  // iterations since the last better primal point (or since the start)
+  for (int it = 0; it < options.max_ipm_iterations; ++it, ++waited) {
+    out.iterations = it + 1;
+    if (waited >= (have_primal ? kPrimalWait : kFirstPrimalWait)) {
+      out.reason = "dual scaling found no better primal point in " + std::to_string(waited) + " iterations";
+      break;
+    }
+    invert_lower_factor(ws.L, ws.L_inv);
+    gram_of_lower_factor(ws.L_inv, ws.W);
+    ws.M = ws.W.cwiseAbs2();
+    if (!ws.schur.factor(ws.M)) {
+      out.reason = "dual scaling: |Z⁻¹|∘² not positive definite at iteration " + std::to_string(it);
+      break;
+    }
+    ws.dw = ws.W.diagonal().real();
+    ws.schur.solve(VectorXd::Ones(N), ws.dy1);
+    ws.schur.solve(ws.dw, ws.dy2);
+    const double dual = y.sum();
+    // The same relative gap as the primal–dual method's (its floor is half the d = 2 problem's).
+    const double rel_gap = (z_bar - dual) / std::max({0.5e-4, std::abs(z_bar), std::abs(dual)});
+    if (have_primal && rel_gap < options.gap_tol) {
+      out.converged = true;
+      break;
+    }
+    if (have_primal && rel_gap < handoff_gap) {
+      out.handed_off = true;
+      break;
+    }
+    // The primal point at μ = (z̄ − Σ y)/ρ: feasible when Z + diag(Δy(μ)) ⪰ 0.
+    double mu = (z_bar - dual) / rho;
+    ws.d = ws.dy1 / mu - ws.dy2;
+    ws.trial = H;
+    ws.trial.diagonal() -= (y - ws.d).cast<std::complex<double>>();
+    if (cholesky_in_place(ws.trial)) {
+      const double objective = dual + mu * (static_cast<double>(N) + ws.d.dot(ws.dw));
+      if (objective < z_bar) {
+        z_bar = objective;
+        best_mu = mu;
+        ws.best_d = ws.d;
+        ws.best_W = ws.W;
+        have_primal = true;
+        waited = -1;  // (the loop's increment makes it 0)
+      }
+    }
+    // The dual step for the (possibly lowered) z̄, to kStepFraction of the boundary of Z − α diag(Δy) ⪰ 0.
+    mu = (z_bar - dual) / rho;
+    ws.dy = ws.dy1 / mu - ws.dy2;
+    const double lowest = lanczos_lowest<VectorXcd>(N, kDualLanczosSteps, [&](const VectorXcd& v, VectorXcd& w) {
+      dual_step_operator(ws.L_inv, ws.dy, v, ws.u, w);
+    });
+    double alpha = lowest >= 0 ? 1.0 : std::min(1.0, -kStepFraction / lowest);
+    bool stepped = false;
+    for (int tries = 0; tries < 30 && !stepped; ++tries) {
+      ws.y_trial = y + alpha * ws.dy;
+      stepped = factor_slack(H, ws.y_trial, ws.trial);
+      if (!stepped) alpha *= 0.7;
+    }
+    if (!stepped) {
+      out.reason = "dual scaling stalled at iteration " + std::to_string(it);
+      break;
+    }
+    y = ws.y_trial;
+    std::swap(ws.L, ws.trial);
+  }
+  if (!out.converged && !out.handed_off && out.reason.empty())
+    out.reason = "dual scaling reached " + std::to_string(options.max_ipm_iterations) + " iterations";
+  if (!have_primal) {
+    if (out.reason.empty()) out.reason = "dual scaling found no primal point";
+    out.converged = out.handed_off = false;
+    return out;
+  }
+  // X = μ (W + W diag(Δy) W) at the best primal point, made exactly Hermitian with unit diagonal.
+  MatrixXcd WD = ws.best_W * ws.best_d.cast<std::complex<double>>().asDiagonal();  // W diag(Δy), N × N
+  multiply(WD, ws.best_W, out.X, best_mu, false);
+  out.X += best_mu * ws.best_W;
+  out.X = (0.5 * (out.X + out.X.adjoint())).eval();
+  const VectorXd root = out.X.diagonal().real().cwiseSqrt().cwiseInverse();
+  out.X = root.asDiagonal() * out.X * root.asDiagonal();
+  out.y = y;
+  return out;
+}
+
+}  // namespace fact::sdp::detail
