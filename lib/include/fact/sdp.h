@@ -33,7 +33,9 @@ enum class Method {
                      // Newton (the whole staircase for d = 2 and n ≤ 8) and null_space (real C);
                      // the interior point when they do not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
-  interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector)
+  interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector); in
+                     // automatic mode on the complex form, dual scaling (DSDP's method) from the
+                     // staircase's warm start up to the hand-off to Newton
   complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
                      // Riemannian staircase on Y ∈ ℂ^{N×p}, unit rows, Newton steps in complex
                      // arithmetic; any other C is invalid_input for it
