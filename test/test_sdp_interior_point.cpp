@@ -33,6 +33,31 @@ Eigen::MatrixXd scaled_plain_cost(int drones, std::uint64_t seed) {
   return C / C.norm();
 }
 
+// The Hermitian form H (N × N) of the complex form of the noisy plain cost, scaled to ‖C‖_F = 1.
+Eigen::MatrixXcd complex_test_problem(int drones, std::uint64_t seed) {
+  const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, seed));
+  return fact::sdp::detail::hermitian_of(C0 / C0.norm());
+}
+
+// Re tr(H X) for an outcome's X.
+double complex_objective(const Eigen::MatrixXcd& H, const ComplexInteriorPointOutcome& ip) {
+  return (H.array() * ip.X.array().conjugate()).real().sum();
+}
+
+// The primal–dual method resumed from `handed` (a handed-off, strictly feasible pair) converges,
+// counts the handed-off iterations, and ends at the optimum of `whole`, an uninterrupted run:
+// objective and Σ y within 1e-9 relative. Returns the resumed outcome.
+ComplexInteriorPointOutcome expect_resumes_to(const Eigen::MatrixXcd& H, const ComplexInteriorPointOutcome& handed,
+                                              const ComplexInteriorPointOutcome& whole) {
+  const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, Options{}, 0.0, &handed);
+  EXPECT_TRUE(rest.converged) << rest.reason;
+  EXPECT_GT(rest.iterations, handed.iterations);
+  const double optimum = complex_objective(H, whole);
+  EXPECT_NEAR(complex_objective(H, rest), optimum, 1e-9 * std::abs(optimum));
+  EXPECT_NEAR(rest.y.sum(), whole.y.sum(), 1e-9 * std::abs(optimum));
+  return rest;
+}
+
 // The options of automatic mode's rank-2 attempt, for solve_low_rank called directly: rank 2
 // only, at most 25 Newton steps.
 Options rank_two_attempt() {
@@ -231,27 +256,19 @@ TEST(SdpComplexInteriorPoint, ConvergesToTheRealInteriorPointsOptimumWithAFeasib
 TEST(SdpComplexInteriorPoint, HandsOffAndResumesToWhereOneRunEnds) {
   for (int drones : {12, 32}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
-    const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
-    const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+    const Eigen::MatrixXcd H = complex_test_problem(drones, 7);
     const Options o;
-    const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
-      return (H.array() * ip.X.array().conjugate()).real().sum();
-    };
     const ComplexInteriorPointOutcome whole = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
     const ComplexInteriorPointOutcome early = fact::sdp::detail::solve_complex_interior_point(H, o, 1e-3);
     ASSERT_TRUE(early.handed_off) << early.reason;
     EXPECT_FALSE(early.converged);
-    const double early_gap = (objective(early) - early.y.sum()) / std::abs(objective(early));
+    const double early_gap = (complex_objective(H, early) - early.y.sum()) / std::abs(complex_objective(H, early));
     EXPECT_LT(early_gap, 1e-3);
     EXPECT_GT(early_gap, o.gap_tol);
 
-    const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &early);
-    EXPECT_TRUE(rest.converged) << rest.reason;
-    EXPECT_GT(rest.iterations, early.iterations);  // the resumed run counts the handed-off iterations
+    const ComplexInteriorPointOutcome rest = expect_resumes_to(H, early, whole);
     EXPECT_LE(rest.iterations, whole.iterations + 3);
     EXPECT_LT((rest.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
-    EXPECT_NEAR(objective(rest), objective(whole), 1e-9 * std::abs(objective(whole)));
-    EXPECT_NEAR(rest.y.sum(), whole.y.sum(), 1e-9 * std::abs(objective(whole)));
   }
 }
 
@@ -260,12 +277,8 @@ TEST(SdpComplexInteriorPoint, HandsOffAndResumesToWhereOneRunEnds) {
 // optimum of a cold run.
 TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
   const int drones = 32;
-  const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
-  const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+  const Eigen::MatrixXcd H = complex_test_problem(drones, 7);
   const Options o;
-  const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
-    return (H.array() * ip.X.array().conjugate()).real().sum();
-  };
   Eigen::MatrixXcd Y = fact::sdp::detail::bottom_eigenvectors(H, 1, 64);  // N × 1
   Y.rowwise().normalize();
   fact::sdp::detail::complex_newton(H, Y, 15, 1e-12);
@@ -283,8 +296,8 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
   const ComplexInteriorPointOutcome warm = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &start);
   ASSERT_TRUE(cold.converged) << cold.reason;
   ASSERT_TRUE(warm.converged) << warm.reason;
-  EXPECT_NEAR(objective(warm), objective(cold), 1e-9 * std::abs(objective(cold)));
-  EXPECT_NEAR(warm.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
+  EXPECT_NEAR(complex_objective(H, warm), complex_objective(H, cold), 1e-9 * std::abs(complex_objective(H, cold)));
+  EXPECT_NEAR(warm.y.sum(), cold.y.sum(), 1e-9 * std::abs(complex_objective(H, cold)));
 }
 
 // Dual scaling from y = −2·1 with X = I's objective as the upper bound, handed off at a relative
@@ -295,12 +308,8 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
 TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
   for (int drones : {5, 32, 80}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
-    const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
-    const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+    const Eigen::MatrixXcd H = complex_test_problem(drones, 7);
     const Options o;
-    const auto objective = [&](const ComplexInteriorPointOutcome& ip) {
-      return (H.array() * ip.X.array().conjugate()).real().sum();
-    };
     const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(drones, -2.0);
     const ComplexInteriorPointOutcome scaled =
         fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, y0, H.diagonal().real().sum());
@@ -313,17 +322,13 @@ TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
     Eigen::MatrixXcd Z = H;  // H − diag(y), N × N
     Z.diagonal() -= scaled.y.cast<std::complex<double>>();
     EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(Z).info(), Eigen::Success);
-    const double gap = objective(scaled) - scaled.y.sum();
+    const double gap = complex_objective(H, scaled) - scaled.y.sum();
     EXPECT_GT(gap, 0.0);
-    EXPECT_LT(gap / std::max(0.5e-4, std::abs(objective(scaled))), 1e-3);
+    EXPECT_LT(gap / std::max(0.5e-4, std::abs(complex_objective(H, scaled))), 1e-3);
 
     const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
-    const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0, &scaled);
     ASSERT_TRUE(cold.converged) << cold.reason;
-    ASSERT_TRUE(rest.converged) << rest.reason;
-    EXPECT_GT(rest.iterations, scaled.iterations);  // the resumed run counts dual scaling's iterations
-    EXPECT_NEAR(objective(rest), objective(cold), 1e-9 * std::abs(objective(cold)));
-    EXPECT_NEAR(rest.y.sum(), cold.y.sum(), 1e-9 * std::abs(objective(cold)));
+    expect_resumes_to(H, scaled, cold);
   }
 }
 
@@ -331,8 +336,7 @@ TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
 // primal point can beat its upper bound (here the optimum itself).
 TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
   const int drones = 24;
-  const Eigen::MatrixXd C0 = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, 7));
-  const Eigen::MatrixXcd H = fact::sdp::detail::hermitian_of(C0 / C0.norm());
+  const Eigen::MatrixXcd H = complex_test_problem(drones, 7);
   const Options o;
   const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(drones, -2.0);
 
@@ -344,7 +348,7 @@ TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
 
   const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
   ASSERT_TRUE(cold.converged) << cold.reason;
-  const double optimum = (H.array() * cold.X.array().conjugate()).real().sum();
+  const double optimum = complex_objective(H, cold);
   const ComplexInteriorPointOutcome stuck = fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, y0, optimum);
   EXPECT_FALSE(stuck.handed_off || stuck.converged);
   EXPECT_EQ(stuck.X.size(), 0);
