@@ -332,8 +332,9 @@ TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
   }
 }
 
-// Dual scaling refuses an infeasible start, and gives up, with no X and neither flag, when no
-// primal point can beat its upper bound (here the optimum itself).
+// Dual scaling refuses an infeasible start and an upper bound that is not above Σ y₀ (or NaN),
+// and gives up, with no X and neither flag, when no primal point can beat its upper bound (here
+// the optimum itself).
 TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
   const int drones = 24;
   const Eigen::MatrixXcd H = complex_test_problem(drones, 7);
@@ -345,6 +346,15 @@ TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
   EXPECT_FALSE(infeasible.handed_off || infeasible.converged);
   EXPECT_EQ(infeasible.X.size(), 0);
   EXPECT_NE(infeasible.reason.find("not positive definite"), std::string::npos) << infeasible.reason;
+
+  for (const double bound : {y0.sum() - 1.0, y0.sum(), std::numeric_limits<double>::quiet_NaN()}) {
+    SCOPED_TRACE(testing::Message() << "upper bound " << bound);
+    const ComplexInteriorPointOutcome below = fact::sdp::detail::solve_complex_dual_scaling(H, o, 1e-3, y0, bound);
+    EXPECT_FALSE(below.handed_off || below.converged);
+    EXPECT_EQ(below.X.size(), 0);
+    EXPECT_EQ(below.iterations, 1);
+    EXPECT_NE(below.reason.find("is not above the dual objective"), std::string::npos) << below.reason;
+  }
 
   const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
   ASSERT_TRUE(cold.converged) << cold.reason;

@@ -118,6 +118,10 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
       out.handed_off = true;
       break;
     }
+    if (!(z_bar > dual)) {  // (a caller's bound at or below the dual, or NaN: μ would not be positive)
+      out.reason = printed("dual scaling: upper bound %g is not above the dual objective %g", z_bar, dual);
+      break;
+    }
     // The primal point at μ = (z̄ − Σ y)/ρ: feasible when Z + diag(Δy(μ)) ⪰ 0.
     double mu = (z_bar - dual) / rho;
     ws.d = ws.dy1 / mu - ws.dy2;
