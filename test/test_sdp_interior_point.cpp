@@ -303,8 +303,9 @@ TEST(SdpComplexInteriorPoint, WarmStartFromARankOneFactorEndsAtTheColdOptimum) {
 // Dual scaling from y = −2·1 with X = I's objective as the upper bound, handed off at a relative
 // gap of 1e-3: X Hermitian positive definite with unit diagonal, H − diag(y) positive definite,
 // the gap between Re tr(H X) and Σ y positive and below 1e-3 (relative), and the primal–dual
-// method resumed from the pair ends at the optimum of a cold primal–dual run. N = 80 takes the
-// triangular paths of the inverse, the Gram and the dual step's operator.
+// method resumed from the pair ends at the optimum of a cold primal–dual run, also from the pair of
+// a run stopped after 4 iterations. N = 80 takes the triangular paths of the inverse, the Gram and
+// the dual step's operator.
 TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
   for (int drones : {5, 32, 80}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
@@ -316,6 +317,7 @@ TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
     ASSERT_TRUE(scaled.handed_off) << scaled.reason;
     EXPECT_FALSE(scaled.converged);
     EXPECT_GT(scaled.iterations, 1);
+    EXPECT_LE(scaled.iterations, 30);  // 13 / 23 / 24 when written; slower steps take more
     EXPECT_LT((scaled.X - scaled.X.adjoint()).norm(), 1e-12);
     EXPECT_LT((scaled.X.diagonal().real() - Eigen::VectorXd::Ones(drones)).norm(), 1e-12);
     EXPECT_EQ(Eigen::LLT<Eigen::MatrixXcd>(scaled.X).info(), Eigen::Success);
@@ -329,6 +331,15 @@ TEST(SdpComplexDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
     const ComplexInteriorPointOutcome cold = fact::sdp::detail::solve_complex_interior_point(H, o, 0.0);
     ASSERT_TRUE(cold.converged) << cold.reason;
     expect_resumes_to(H, scaled, cold);
+
+    // Stopped early (as when it gives up) it still returns its pair, which solve() resumes from.
+    Options four = o;
+    four.max_ipm_iterations = 4;
+    const ComplexInteriorPointOutcome early =
+        fact::sdp::detail::solve_complex_dual_scaling(H, four, 1e-3, y0, H.diagonal().real().sum());
+    EXPECT_FALSE(early.handed_off || early.converged);
+    ASSERT_EQ(early.X.rows(), drones) << early.reason;
+    expect_resumes_to(H, early, cold);
   }
 }
 

@@ -15,13 +15,14 @@
 // Against the primal–dual interior point (complex_interior_point.cpp) an iteration has no N × N
 // products (that method's two P·W products were 55 % of a tight_noisy N = 200 solve): the
 // inverse and Gram of Z's factor, the N × N real Schur factor, two Cholesky tests and a Lanczos
-// estimate. It takes more iterations to the hand-off (14–27 against 11–15 on tight_noisy N = 32 …
+// estimate. It takes more iterations to the hand-off (13–28 against 11–15 on tight_noisy N = 32 …
 // 200) at about a third of the cost each; X is formed once, at the end (BENCHMARKS.md, session 37).
 //
 // The upper bound matters: started from the staircase's own objective, close to the optimum, μ
 // settled near (z̄ − optimum)/2N on 3 of 42 sweep instances while every primal test failed
 // (80 iterations); from the objective of the primal–dual warm start's X = 0.35·Y Yᴴ + 0.65·I,
-// looser, all 42 handed off within 27 iterations.
+// looser, all 42 handed off within 27 iterations (a review found one that gives up: N = 200,
+// noise 0.15, seed 1; solve() then resumes the primal–dual method from this method's pair).
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -43,11 +44,13 @@ using Eigen::VectorXd;
 // 26 / 22 / 22 / 24 / 30 iterations to a relative gap of 1e-3 with 1.5 / 2 / 3 / 5 / 8 (session 37).
 constexpr double kPotentialWeight = 3.0;
 // Lanczos steps for the dual step length, as the primal–dual corrector's (kLanczosSteps there).
+// The step is kStepFraction of the boundary as Lanczos estimates it (its |λ_min| can be short of
+// the true one, so about that fraction); the Cholesky test is what keeps Z positive definite.
 constexpr int kDualLanczosSteps = 8;
 constexpr double kStepFraction = 0.95;
 // Iterations without a better primal point after which the method gives up (the caller then runs
-// the primal–dual method): before the first one, and between two. A guard only: with the loose
-// upper bound solve() gives, each of the 42 sweep instances (N = 32 … 200) handed off before it.
+// the primal–dual method): before the first one, and between two. With the loose upper bound
+// solve() gives, each of the 42 sweep instances (N = 32 … 200) handed off before it.
 constexpr int kFirstPrimalWait = 10;
 constexpr int kPrimalWait = 10;
 
@@ -82,6 +85,10 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
   ComplexInteriorPointOutcome out;
   Workspace ws(N);
   VectorXd y = y0;
+  if (N == 0) {
+    out.reason = "dual scaling: H is empty";
+    return out;
+  }
   if (!factor_slack(H, y, ws.L)) {
     out.reason = "dual scaling: H − diag(y₀) is not positive definite";
     return out;
@@ -92,11 +99,11 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
   const double rho = kPotentialWeight * static_cast<double>(N);
   int waited = 0;  // iterations since the last better primal point (or since the start)
   for (int it = 0; it < options.max_ipm_iterations; ++it, ++waited) {
-    out.iterations = it + 1;
-    if (waited >= (have_primal ? kPrimalWait : kFirstPrimalWait)) {
+    if (waited >= (have_primal ? kPrimalWait : kFirstPrimalWait)) {  // (before this iteration counts)
       out.reason = "dual scaling found no better primal point in " + std::to_string(waited) + " iterations";
       break;
     }
+    out.iterations = it + 1;
     invert_lower_factor(ws.L, ws.L_inv);
     gram_of_lower_factor(ws.L_inv, ws.W);
     ws.M = ws.W.cwiseAbs2();

@@ -539,11 +539,13 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
                                                          const ComplexInteriorPointOutcome* resume = nullptr);
 
 // Dual scaling on the same problem (complex_dual_scaling.cpp): Newton steps for the dual barrier
-// from y0 (H − diag(y0) ≻ 0), with upper_bound the objective of some feasible X (the staircase's
-// factor), stopping once the relative gap is below handoff_gap (handed_off) or gap_tol
-// (converged). X is its best primal point (positive definite, unit diagonal) and y its last
-// dual iterate, a strictly feasible pair the primal–dual method can resume from; without a primal
-// point (none found better than upper_bound) X is empty and neither flag is set.
+// from y0 (H − diag(y0) ≻ 0), with upper_bound the objective of some feasible X (solve(): the
+// primal–dual warm start's), stopping once the relative gap is below handoff_gap (handed_off) or
+// gap_tol (converged), or giving up (a reason). X is its best primal point (unit diagonal,
+// positive definite up to rounding: its margin shrinks with the gap) and y its last dual
+// iterate, a strictly feasible pair the primal–dual method can resume from, also when it gave up
+// after finding one; without a primal point better than upper_bound X is empty. Neither flag
+// is set when it gave up.
 ComplexInteriorPointOutcome solve_complex_dual_scaling(const Eigen::MatrixXcd& H, const Options& options,
                                                        double handoff_gap, const Eigen::VectorXd& y0,
                                                        double upper_bound);

@@ -304,8 +304,9 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
 // start, dual scaling (complex_dual_scaling.cpp) takes the first part, to the hand-off, from its
 // dual y and with its X's objective as the upper bound; the primal–dual method only when dual
 // scaling gives up, and to resume. Dual scaling to the hand-off, against the primal–dual method
-// from the same start: 0.57 … 0.88 of the solve's time at N = 32 … 200, neutral below (where the
-// staircase mostly certifies), the same statuses and optima (BENCHMARKS.md, session 37). Its dual y
+// from the same start, summed over 6 sweep instances per N: 0.57 … 0.88 of the solve's time at
+// N = 32 … 200 (the benchmark's own N = 32 instance 1.08), neutral below (where the staircase
+// mostly certifies), the same statuses and optima (BENCHMARKS.md, session 37). Its dual y
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
 // rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
@@ -318,9 +319,13 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   if (warm)  // upper bound: the objective of the primal–dual method's warm start X
     ip = detail::solve_complex_dual_scaling(H, o, kComplexHandoffGap, start.y,
                                             (H.array() * start.X.array().conjugate()).real().sum());
-  if (!ip.handed_off && !ip.converged) {  // no start, or dual scaling gave up: the primal–dual method
-    const int wasted = ip.iterations;
-    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap, warm ? &start : nullptr);
+  if (!ip.handed_off && !ip.converged) {
+    // No start, or dual scaling gave up: the primal–dual method, from dual scaling's best primal
+    // point and last y when it found one (a strictly feasible pair, closer to the optimum than
+    // the start; the resumed run counts its iterations), else from the start.
+    const bool resumable = ip.X.size() > 0;
+    const int wasted = resumable ? 0 : ip.iterations;
+    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap, resumable ? &ip : (warm ? &start : nullptr));
     ip.iterations += wasted;
   }
   if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (4 of 240 sweep instances,
