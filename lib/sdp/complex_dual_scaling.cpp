@@ -67,7 +67,7 @@ struct Workspace {
   MatrixXd M;        // |W|∘², the dual barrier's Hessian (N × N real)
   SpdSolver schur;   // M factored
   VectorXcd u;       // Lanczos scratch (N)
-  VectorXd dw, dy1, dy2, dy, d, best_d, y_trial;  // diag W, M⁻¹1, M⁻¹ diag W, the dual step, Δy(μ), N each
+  VectorXd dw, dy1, dy2, dy, d, best_d, y_trial;  // diag W, M⁻¹1, M⁻¹ diag W, the dual step, Δy(μ), a trial y; N each
 };
 
 // Z = H − diag(y) factored into `factor` (its lower triangle); false when not positive definite.
@@ -115,8 +115,7 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     ws.schur.solve(VectorXd::Ones(N), ws.dy1);
     ws.schur.solve(ws.dw, ws.dy2);
     const double dual = y.sum();
-    // The same relative gap as the primal–dual method's (its floor is half the d = 2 problem's).
-    const double rel_gap = (z_bar - dual) / std::max({0.5e-4, std::abs(z_bar), std::abs(dual)});
+    const double rel_gap = complex_relative_gap(z_bar - dual, z_bar, dual);
     if (have_primal && rel_gap < options.gap_tol) {
       out.converged = true;
       break;
@@ -132,9 +131,8 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     // The primal point at μ = (z̄ − Σ y)/ρ: feasible when Z + diag(Δy(μ)) ⪰ 0.
     double mu = (z_bar - dual) / rho;
     ws.d = ws.dy1 / mu - ws.dy2;
-    ws.trial = H;
-    ws.trial.diagonal() -= (y - ws.d).cast<std::complex<double>>();
-    if (cholesky_in_place(ws.trial)) {
+    ws.y_trial = y - ws.d;  // Z + diag(Δy(μ)) = H − diag(y − Δy(μ))
+    if (factor_slack(H, ws.y_trial, ws.trial)) {
       const double objective = dual + mu * (static_cast<double>(N) + ws.d.dot(ws.dw));
       if (objective < z_bar) {
         z_bar = objective;
@@ -151,14 +149,11 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     const double lowest = lanczos_lowest<VectorXcd>(N, kDualLanczosSteps, [&](const VectorXcd& v, VectorXcd& w) {
       dual_step_operator(ws.L_inv, ws.dy, v, ws.u, w);
     });
-    double alpha = lowest >= 0 ? 1.0 : std::min(1.0, -kStepFraction / lowest);
-    bool stepped = false;
-    for (int tries = 0; tries < 30 && !stepped; ++tries) {
-      ws.y_trial = y + alpha * ws.dy;
-      stepped = factor_slack(H, ws.y_trial, ws.trial);
-      if (!stepped) alpha *= 0.7;
-    }
-    if (!stepped) {
+    const double alpha = shrink_until_passes(lowest >= 0 ? 1.0 : std::min(1.0, -kStepFraction / lowest), [&](double a) {
+      ws.y_trial = y + a * ws.dy;
+      return factor_slack(H, ws.y_trial, ws.trial);
+    });
+    if (alpha == 0.0) {
       out.reason = "dual scaling stalled at iteration " + std::to_string(it);
       break;
     }
@@ -176,9 +171,8 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
   MatrixXcd WD = ws.best_W * ws.best_d.cast<std::complex<double>>().asDiagonal();  // W diag(Δy), N × N
   multiply(WD, ws.best_W, out.X, best_mu, false);
   out.X += best_mu * ws.best_W;
-  out.X = (0.5 * (out.X + out.X.adjoint())).eval();
-  const VectorXd root = out.X.diagonal().real().cwiseSqrt().cwiseInverse();
-  out.X = root.asDiagonal() * out.X * root.asDiagonal();
+  hermitian_part(out.X);
+  rescale_to_unit_diagonal(out.X);
   out.y = y;
   return out;
 }

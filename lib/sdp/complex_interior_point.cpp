@@ -60,16 +60,6 @@ struct Workspace {
   VectorXd ones, rhs, dy_aff, dy;        // b = A(X) = 1, Schur right-hand side, dual directions (N)
 };
 
-// Hermitian part in place: A ← (A + Aᴴ)/2.
-void hermitian_part(MatrixXcd& A) {
-  A.diagonal() = A.diagonal().real().cast<std::complex<double>>();
-  for_each_entry_below_diagonal(A.rows(), [&A](Eigen::Index i, Eigen::Index j) {
-    const std::complex<double> v = 0.5 * (A(i, j) + std::conj(A(j, i)));
-    A(i, j) = v;
-    A(j, i) = std::conj(v);
-  });
-}
-
 // Lanczos steps of the step-length estimate, predictor and corrector alike. The corrector's step
 // is confirmed by a Cholesky test, which shrinks it when 8 steps overestimate λ_min; with 24 the
 // iterations on tight_noisy N = 32 … 200 were the same and the interior point took 12–30 % longer
@@ -91,11 +81,10 @@ template <class FormTrial>
 double step_length(double lowest, double tau, Workspace& ws, ComplexCholesky& next, FormTrial form_trial) {
   double alpha = lowest >= 0 ? 1.0 : std::min(1.0, -tau / lowest);
   if (tau >= 1.0) return alpha;  // the predictor's step only sets σ
-  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
-    form_trial(alpha);
-    if (next.compute(ws.trial)) return alpha;
-  }
-  return 0.0;
+  return shrink_until_passes(alpha, [&](double a) {
+    form_trial(a);
+    return next.compute(ws.trial);
+  });
 }
 
 // Up to this N the primal step's Lanczos multiplies by an explicit Lx⁻¹ (inverted once an
@@ -168,6 +157,20 @@ double complementarity_after(const MatrixXcd& X, const MatrixXcd& dx, double a, 
 
 }  // namespace
 
+void hermitian_part(MatrixXcd& A) {
+  A.diagonal() = A.diagonal().real().cast<std::complex<double>>();
+  for_each_entry_below_diagonal(A.rows(), [&A](Eigen::Index i, Eigen::Index j) {
+    const std::complex<double> v = 0.5 * (A(i, j) + std::conj(A(j, i)));
+    A(i, j) = v;
+    A(j, i) = std::conj(v);
+  });
+}
+
+void rescale_to_unit_diagonal(MatrixXcd& X) {
+  const VectorXd root = X.diagonal().real().cwiseSqrt().cwiseInverse();
+  X = root.asDiagonal() * X * root.asDiagonal();
+}
+
 void dual_step_operator(const Eigen::MatrixXcd& Lz_inv, const Eigen::VectorXd& dy, const Eigen::VectorXcd& v,
                         Eigen::VectorXcd& u, Eigen::VectorXcd& w) {
   if (Lz_inv.rows() >= kTriangularProductMinSize) {
@@ -207,8 +210,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     out.iterations = it + 1;
     const double primal = (H.array() * X.array().conjugate()).real().sum(), dual = y.sum();
     const double gap = (X.array() * Z.array().conjugate()).real().sum();
-    // The d = 2 problem's objective is twice this one's: the same floor as its relative gap.
-    const double rel_gap = gap / std::max({0.5e-4, std::abs(primal), std::abs(dual)});
+    const double rel_gap = complex_relative_gap(gap, primal, dual);
     bool improved = false;
     const GapRule::Verdict verdict = rule.next(gap, rel_gap, improved);
     if (improved) {
@@ -266,9 +268,7 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
     }
   }
   X = best_X;
-  // Undo rounding drift: X ← D^{-1/2} X D^{-1/2}, D = diag(X), so the diagonal is 1 again.
-  const VectorXd root = X.diagonal().real().cwiseSqrt().cwiseInverse();
-  X = root.asDiagonal() * X * root.asDiagonal();
+  rescale_to_unit_diagonal(X);  // undo rounding drift
   if (!out.converged && out.reason.empty())
     out.reason = "complex interior point reached " + std::to_string(options.max_ipm_iterations) + " iterations";
   if (resume) out.iterations += resume->iterations;

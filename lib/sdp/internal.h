@@ -538,6 +538,17 @@ ComplexInteriorPointOutcome solve_complex_interior_point(const Eigen::MatrixXcd&
                                                          double handoff_gap,
                                                          const ComplexInteriorPointOutcome* resume = nullptr);
 
+// Hermitian part in place: A ← (A + Aᴴ)/2 (A N × N; the diagonal made exactly real).
+void hermitian_part(Eigen::MatrixXcd& A);
+// X ← D^{-1/2} X D^{-1/2} with D = diag(X) (X N × N Hermitian PSD): a unit diagonal again after
+// rounding drift, positive definiteness kept.
+void rescale_to_unit_diagonal(Eigen::MatrixXcd& X);
+// The complex interior points' relative gap: gap over max(0.5e-4, |primal|, |dual|), the floor
+// half of the d = 2 problem's 1e-4 since its objective is twice this one's.
+inline double complex_relative_gap(double gap, double primal, double dual) {
+  return gap / std::max({0.5e-4, std::abs(primal), std::abs(dual)});
+}
+
 // Dual scaling on the same problem (complex_dual_scaling.cpp): Newton steps for the dual barrier
 // from y0 (H − diag(y0) ≻ 0), with upper_bound the objective of some feasible X (solve(): the
 // primal–dual warm start's), stopping once the relative gap is below handoff_gap (handed_off) or

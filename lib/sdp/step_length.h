@@ -122,4 +122,14 @@ class StepLength {
   Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
 };
 
+// The first of α, 0.7α, 0.7²α, … (30 tries) for which passes(α) holds (a Cholesky test of the
+// trial point it forms), or 0 when none does: the step lengths' confirmation after a Lanczos
+// estimate of the boundary, in the complex interior point and in dual scaling.
+template <class Passes>
+double shrink_until_passes(double alpha, Passes passes) {
+  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7)
+    if (passes(alpha)) return alpha;
+  return 0.0;
+}
+
 }  // namespace fact::sdp::detail
