@@ -377,6 +377,137 @@ TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
   EXPECT_NE(stuck.reason.find("no better primal point"), std::string::npos) << stuck.reason;
 }
 
+// The real interior point's cold start for dual scaling: Λ₀ = −s·I (s = cold_start_shift), n × 2.
+Eigen::MatrixXd cold_lambda(const Eigen::MatrixXd& C) {
+  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(C.rows(), 2);
+  const double shift = fact::sdp::detail::cold_start_shift(C);
+  for (Eigen::Index i = 0; i < C.rows(); i += 2) lambda.middleRows(i, 2).diagonal().setConstant(-shift);
+  return lambda;
+}
+
+// tr Λ for Λ_ii stacked (n × 2): the dual objective.
+double dual_objective(const Eigen::MatrixXd& lambda) {
+  double sum = 0;
+  for (Eigen::Index i = 0; i < lambda.rows(); i += 2) sum += lambda(i, 0) + lambda(i + 1, 1);
+  return sum;
+}
+
+// The primal–dual method resumed from `handed` converges to the optimum of the uninterrupted
+// run `whole`, within the gaps both reached.
+void expect_real_resumes_to(const Eigen::MatrixXd& C, const InteriorPointOutcome& handed,
+                            const InteriorPointOutcome& whole) {
+  const InteriorPointOutcome rest = solve_interior_point(C, 2, Options{}, 0.0, &handed);
+  EXPECT_TRUE(rest.converged) << rest.reason;
+  expect_feasible(rest);
+  EXPECT_LT(gap_of(C, rest), 1e-9);
+  EXPECT_NEAR(C.cwiseProduct(rest.X).sum(), C.cwiseProduct(whole.X).sum(), 1e-9);
+  EXPECT_NEAR(dual_objective(rest.lambda), dual_objective(whole.lambda), 1e-9);
+}
+
+// Real dual scaling from the cold start, with tr C = ⟨C, I⟩ as its upper bound (as solve() runs it
+// without a warm start), on random full-rank C (optimum of high rank) and on the paper's plain
+// cost: a strictly feasible pair within the hand-off gap, which the primal–dual method finishes at
+// the optimum of its own uninterrupted run; stopped early it still returns its pair.
+TEST(SdpDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
+  std::mt19937 rng(43);
+  std::normal_distribution<double> gauss;
+  const std::pair<const char*, Eigen::MatrixXd> costs[] = {
+      {"random full rank n = 16", scaled_random_psd(16, 16, rng, gauss)},
+      {"random full rank n = 64", scaled_random_psd(64, 64, rng, gauss)},
+      {"random full rank n = 128", scaled_random_psd(128, 128, rng, gauss)},
+      {"plain N = 30", scaled_plain_cost(30, 9)},
+  };
+  for (const auto& [name, C] : costs) {
+    SCOPED_TRACE(name);
+    const Options o;
+    const Eigen::MatrixXd lambda0 = cold_lambda(C);
+    const InteriorPointOutcome scaled = fact::sdp::detail::solve_dual_scaling(C, 2, o, 1e-5, lambda0, C.trace());
+    ASSERT_TRUE(scaled.handed_off) << scaled.reason;
+    EXPECT_FALSE(scaled.converged);
+    EXPECT_GT(scaled.iterations, 1);
+    EXPECT_LE(scaled.iterations, 30);  // 13–19 when written
+    expect_feasible(scaled);
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(scaled.X).info(), Eigen::Success);
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(fact::sdp::detail::certificate_matrix(C, scaled.lambda, 2)).info(),
+              Eigen::Success);
+    EXPECT_GT(gap_of(C, scaled), 0.0);
+    EXPECT_LT(gap_of(C, scaled), 1e-5);
+
+    const InteriorPointOutcome whole = solve_interior_point(C, 2, o);
+    ASSERT_TRUE(whole.converged) << whole.reason;
+    expect_real_resumes_to(C, scaled, whole);
+
+    Options four = o;
+    four.max_ipm_iterations = 4;
+    const InteriorPointOutcome early = fact::sdp::detail::solve_dual_scaling(C, 2, four, 1e-5, lambda0, C.trace());
+    EXPECT_FALSE(early.handed_off || early.converged);
+    ASSERT_EQ(early.X.rows(), C.rows()) << early.reason;
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(early.X).info(), Eigen::Success);
+    expect_real_resumes_to(C, early, whole);
+  }
+}
+
+// Real dual scaling refuses an empty C, an infeasible start and an upper bound that is not above
+// tr Λ₀ (or NaN), and gives up, with no X and neither flag, when no primal point can beat its
+// upper bound (the optimum itself).
+TEST(SdpDualScaling, RefusesWhatItCannotStartFromAndGivesUpBelowTheOptimum) {
+  std::mt19937 rng(47);
+  std::normal_distribution<double> gauss;
+  const Eigen::MatrixXd C = scaled_random_psd(24, 24, rng, gauss);
+  const Options o;
+  const Eigen::MatrixXd lambda0 = cold_lambda(C);
+  using fact::sdp::detail::solve_dual_scaling;
+
+  const InteriorPointOutcome empty = solve_dual_scaling(Eigen::MatrixXd(), 2, o, 1e-5, Eigen::MatrixXd(), 1.0);
+  EXPECT_EQ(empty.X.size(), 0);
+  EXPECT_NE(empty.reason.find("C is empty"), std::string::npos) << empty.reason;
+
+  const InteriorPointOutcome infeasible =
+      solve_dual_scaling(C, 2, o, 1e-5, Eigen::MatrixXd::Constant(24, 2, 2.0), C.trace());
+  EXPECT_FALSE(infeasible.handed_off || infeasible.converged);
+  EXPECT_EQ(infeasible.X.size(), 0);
+  EXPECT_NE(infeasible.reason.find("not positive definite"), std::string::npos) << infeasible.reason;
+
+  const double dual = dual_objective(lambda0);
+  for (const double bound : {dual - 1.0, dual, std::numeric_limits<double>::quiet_NaN()}) {
+    SCOPED_TRACE(testing::Message() << "upper bound " << bound);
+    const InteriorPointOutcome below = solve_dual_scaling(C, 2, o, 1e-5, lambda0, bound);
+    EXPECT_FALSE(below.handed_off || below.converged);
+    EXPECT_EQ(below.X.size(), 0);
+    EXPECT_EQ(below.iterations, 1);
+    EXPECT_NE(below.reason.find("is not above the dual objective"), std::string::npos) << below.reason;
+  }
+
+  const InteriorPointOutcome whole = solve_interior_point(C, 2, o);
+  ASSERT_TRUE(whole.converged) << whole.reason;
+  const InteriorPointOutcome stuck = solve_dual_scaling(C, 2, o, 1e-5, lambda0, C.cwiseProduct(whole.X).sum());
+  EXPECT_FALSE(stuck.handed_off || stuck.converged);
+  EXPECT_EQ(stuck.X.size(), 0);
+  EXPECT_LT(stuck.iterations, o.max_ipm_iterations);
+  EXPECT_NE(stuck.reason.find("no better primal point"), std::string::npos) << stuck.reason;
+}
+
+// solve() in automatic mode takes dual scaling to the hand-off when the interior point has no warm
+// start (n > 48): random full-rank C of 64 and 100 rows, d = 2 and d = 1, certify at the explicit
+// primal–dual method's optimum.
+TEST(SdpDualScaling, AutomaticModeWithoutAWarmStartCertifiesTheInteriorPointsOptimum) {
+  std::mt19937 rng(53);
+  std::normal_distribution<double> gauss;
+  for (const auto& [n, d] : {std::pair{64, 2}, std::pair{100, 2}, std::pair{64, 1}}) {
+    SCOPED_TRACE("n = " + std::to_string(n) + ", d = " + std::to_string(d));
+    const Eigen::MatrixXd C = scaled_random_psd(n, n, rng, gauss);
+    const fact::sdp::Result automatic = fact::sdp::solve(C, d);
+    ASSERT_TRUE(automatic.certified()) << automatic.reason;
+    EXPECT_EQ(automatic.method_used, fact::sdp::Method::interior_point);
+    Options explicit_ip;
+    explicit_ip.method = fact::sdp::Method::interior_point;
+    const fact::sdp::Result reference = fact::sdp::solve(C, d, explicit_ip);
+    ASSERT_TRUE(reference.certified()) << reference.reason;
+    EXPECT_NEAR(automatic.objective, reference.objective, 1e-9 * std::abs(reference.objective));
+    EXPECT_LE(automatic.rel_gap, 1e-9);
+  }
+}
+
 // Z (n × n, Hermitian positive definite: B Bᴴ + n I for a Gaussian B), its factor L, L⁻¹ by
 // invert_lower_factor and W by gram_of_lower_factor: L⁻¹ lower triangular with L⁻¹ L = I, and
 // W = L⁻ᴴ L⁻¹ = Z⁻¹, Hermitian and equal to the dense product to rounding.

@@ -155,21 +155,6 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
   return value;
 }
 
-// The cold start's dual shift s (Λ = −s·I, Z = C + s·I) for C scaled to ‖C‖_F = 1. C's eigenvalues
-// then have root mean square 1/√n, and s = 1/√n starts Z on C's own scale: s = 2 (Z dominated by
-// the shift, μ₀ ≈ 2) spent the first iterations bringing μ down to it. Sweep (4 seeds, N = 25 … 64,
-// cold start): random full rank 0.91–0.97 of the time, the paper's cost with 2N rounds 0.91–0.95,
-// the other kinds 0.98–1.01, no status changes; N = 100 / 200 random full rank 22.2 → 20.9 ms,
-// 141 → 128 ms (BENCHMARKS.md, session 27). C need not be PSD: s is taken only when C + (s/2)·I
-// passes a Cholesky test, so that λ_min(Z) ≥ s/2 (a Z that only just passed, λ_min(C) at −s, left
-// the interior point stalled at a gap of 1e-4 … 1e-2 from a nearly singular start: review, session
-// 27); otherwise s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
-double cold_start_shift(const Eigen::MatrixXd& C) {
-  const double shift = 1.0 / std::sqrt(static_cast<double>(C.rows()));
-  Eigen::MatrixXd Z = C;  // C + (s/2)·I, factored in place (n × n)
-  Z.diagonal().array() += 0.5 * shift;
-  return cholesky_in_place(Z) ? shift : 2.0;
-}
 
 // The real interior point's centring exponent (mehrotra_centring): 2 up to kSquareCentringMaxSize
 // rows (N = 24), the usual 3 above. Sweep (6 seeds, N = 5 … 32, two runs), 2 against 3: plain /
@@ -287,17 +272,36 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   }
   X = best_X;
   lambda_from_y(best_y, entries, d, lambda);
-  // Undo rounding drift: X ← D^{-1/2} X D^{-1/2}, D = blkdiag(X_ii), so every block is I again.
-  for (int i = 0; i < n; i += d) {
-    const Eigen::MatrixXd root = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X.block(i, i, d, d)).operatorInverseSqrt();
-    X.middleRows(i, d) = root * X.middleRows(i, d);
-    X.middleCols(i, d) = X.middleCols(i, d) * root;
-  }
+  unit_diagonal_blocks(X, d);  // undo rounding drift
   if (!out.converged && out.reason.empty())
     out.reason = "interior point reached " + std::to_string(options.max_ipm_iterations) + " iterations";
   out.X = X;
   out.lambda = lambda;
   return out;
+}
+
+void unit_diagonal_blocks(Eigen::MatrixXd& X, int d) {
+  for (Eigen::Index i = 0; i < X.rows(); i += d) {
+    const Eigen::MatrixXd root = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X.block(i, i, d, d)).operatorInverseSqrt();
+    X.middleRows(i, d) = root * X.middleRows(i, d);
+    X.middleCols(i, d) = X.middleCols(i, d) * root;
+  }
+}
+
+// The cold start's dual shift s (Λ = −s·I, Z = C + s·I) for C scaled to ‖C‖_F = 1. C's eigenvalues
+// then have root mean square 1/√n, and s = 1/√n starts Z on C's own scale: s = 2 (Z dominated by
+// the shift, μ₀ ≈ 2) spent the first iterations bringing μ down to it. Sweep (4 seeds, N = 25 … 64,
+// cold start): random full rank 0.91–0.97 of the time, the paper's cost with 2N rounds 0.91–0.95,
+// the other kinds 0.98–1.01, no status changes; N = 100 / 200 random full rank 22.2 → 20.9 ms,
+// 141 → 128 ms (BENCHMARKS.md, session 27). C need not be PSD: s is taken only when C + (s/2)·I
+// passes a Cholesky test, so that λ_min(Z) ≥ s/2 (a Z that only just passed, λ_min(C) at −s, left
+// the interior point stalled at a gap of 1e-4 … 1e-2 from a nearly singular start: review, session
+// 27); otherwise s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
+double cold_start_shift(const Eigen::MatrixXd& C) {
+  const double shift = 1.0 / std::sqrt(static_cast<double>(C.rows()));
+  Eigen::MatrixXd Z = C;  // C + (s/2)·I, factored in place (n × n)
+  Z.diagonal().array() += 0.5 * shift;
+  return cholesky_in_place(Z) ? shift : 2.0;
 }
 
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,

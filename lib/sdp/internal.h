@@ -385,6 +385,24 @@ struct InteriorPointOutcome {
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
                                           double handoff_gap = 0, const InteriorPointOutcome* resume = nullptr);
 
+// The interior point's cold start's dual shift s (Λ = −s·I, Z = C + s·I ≻ 0) for C scaled to ‖C‖_F = 1.
+double cold_start_shift(const Eigen::MatrixXd& C);
+
+// X ← D^{-1/2} X D^{-1/2} with D = blkdiag(X_ii) (X n × n symmetric PSD, d × d blocks): every
+// diagonal block I again after rounding drift, positive definiteness kept.
+void unit_diagonal_blocks(Eigen::MatrixXd& X, int d);
+
+// Dual scaling on the same problem (dual_scaling.cpp, the real counterpart of
+// solve_complex_dual_scaling): Newton steps for the dual barrier from lambda0 (n × d, Λ_ii
+// stacked, C − blkdiag(Λ₀) ≻ 0), with upper_bound the objective of some feasible X, stopping once
+// the relative gap is below handoff_gap (handed_off) or gap_tol (converged), or giving up (a
+// reason). X is its best primal point (identity blocks, positive definite up to rounding) and
+// lambda its last dual iterate, a strictly feasible pair solve_interior_point can resume from,
+// also when it gave up after finding one; without a primal point better than upper_bound X is
+// empty. Neither flag is set when it gave up.
+InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
+                                        const Eigen::MatrixXd& lambda0, double upper_bound);
+
 // A strictly feasible start for the interior point from a factor Y (n × r, orthonormal-row d × r
 // blocks) of a point near the optimum and its multipliers lambda (n × d, Λ_ii stacked; the
 // rank-d attempt's, which did not certify): X = (1 − mix)·Y Yᵀ + mix·I (identity blocks, positive

@@ -34,8 +34,9 @@ enum class Method {
                      // the interior point when they do not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
   interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector); in
-                     // automatic mode on the complex form, dual scaling (DSDP's method) from the
-                     // staircase's warm start up to the hand-off to Newton
+                     // automatic mode dual scaling (DSDP's method) takes the part up to the
+                     // hand-off to Newton on the complex form (from the staircase's warm start)
+                     // and on a real C without a warm start (n > 48, from X = I)
   complex_low_rank,  // d = 2 and C the real embedding of a Hermitian H (complex_form's output):
                      // Riemannian staircase on Y ∈ ℂ^{N×p}, unit rows, Newton steps in complex
                      // arithmetic; any other C is invalid_input for it

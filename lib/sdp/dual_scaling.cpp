@@ -1,0 +1,180 @@
+// Dual scaling for the real problem (S. J. Benson, Y. Ye and X. Zhang, SIAM J. Optim. 10(2), 2000;
+// the method of DSDP), the real counterpart of complex_dual_scaling.cpp:
+//     min ⟨C, X⟩  s.t.  X_ii = I_d,  X ⪰ 0     dual  max bᵀy  s.t.  Z = C − Aᵀ(y) ⪰ 0
+// with the constraints of interior_point.cpp (p = (block i, a ≤ b), Aᵀ(y) = blkdiag(Λ), b_p = 1 on
+// a block's diagonal and 0 off it).
+//
+// Each iteration is a Newton step for the dual barrier  max bᵀy/μ + ln det Z  from a strictly
+// feasible y: with W = Z⁻¹ (n × n) the barrier's Hessian is M_pq = ⟨A_p, W A_q W⟩ (m × m, the
+// primal–dual Schur complement with X = W), and M Δy = b/μ − A(W), i.e. Δy = Δy₁/μ − Δy₂ with
+// M Δy₁ = b and M Δy₂ = A(W). The same step gives a primal point for free:
+//     X(μ) = μ W (Z + Aᵀ(Δy)) W
+// has A(X) = b by construction, is ⪰ 0 exactly when Z + Aᵀ(Δy) = C − Aᵀ(y − Δy) is (one Cholesky
+// test), and ⟨C, X(μ)⟩ = bᵀy + μ (n + Δyᵀ A(W)), an O(m) sum. Only the best primal point's W and
+// Δy are kept; X is formed once, at the end.
+//
+// Against the primal–dual interior point (interior_point.cpp) an iteration has no n × n products,
+// no primal factor and one step length instead of four: Z⁻¹ by its factor, the m × m Hessian and
+// its Cholesky factor (m = 3N for d = 2, the largest piece), the primal test and the dual step's
+// test. From the cold start it takes 13–17 iterations to a relative gap of 1e-5 on random
+// full-rank C (N = 8 … 100) against the primal–dual method's 8–11, at about half the cost each
+// (BENCHMARKS.md, session 38). Where the optimum is near 0 (the floor 1e-4 of the relative gap then
+// asks for an absolute gap of 1e-9) it needed 26–32 iterations against 13.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "internal.h"
+#include "spd_solver.h"
+#include "step_length.h"
+
+namespace fact::sdp::detail {
+namespace {
+
+// ρ = kRealPotentialWeight·n in μ = (z̄ − bᵀy)/ρ (DSDP's potential parameter). Random full rank,
+// 3 seeds at N = 25 / 32 / 48 / 64 / 100, time against the primal–dual method: 0.89 / 0.96 / 0.82 /
+// 0.89 / 0.71 with 3, 0.85 / 0.85 / 0.76 / 0.83 / 0.66 with 5, 0.82 / 0.86 / 0.76 / 0.85 / 0.66
+// with 8; 1.5 and 2 took 1.4–2× the iterations (session 38).
+constexpr double kRealPotentialWeight = 5.0;
+// The dual step's fraction of the boundary of Z − α Aᵀ(Δy) ⪰ 0 (StepLength confirms it by a
+// Cholesky test).
+constexpr double kRealStepFraction = 0.95;
+// Iterations without a better primal point after which the method gives up: before the first one,
+// and between two.
+constexpr int kRealPrimalWait = 10;
+
+// Every matrix of one iteration, allocated once (n = C's size, m = constraints, d = block size).
+struct Workspace {
+  Workspace(int n, int m, int d)
+      : Z(n, n), Lz(n, n), Lz_inv(n, n), W(n, n), best_W(n, n), trial(n, n), trial_factor(n, n), M(m, m), schur(m),
+        steps(n), lambda(n, d), dz(n, d), aw(m), dy1(m), dy2(m), dy(m), step(m), best_step(m), y_trial(m) {}
+  Eigen::MatrixXd Z, Lz;             // the dual slack C − Aᵀ(y) and its factor (lower triangle), n × n
+  Eigen::MatrixXd Lz_inv, W;         // Lz⁻¹ (lower triangular) and W = Z⁻¹, n × n
+  Eigen::MatrixXd best_W;            // W at the best primal point so far, n × n
+  Eigen::MatrixXd trial, trial_factor;  // the primal test's C − Aᵀ(y − Δy) and its factor, n × n
+  Eigen::MatrixXd M;                 // the dual barrier's Hessian, m × m
+  SpdSolver schur;                   // M factored
+  StepLength steps;                  // the dual step's length (and the factor of the next Z)
+  Eigen::MatrixXd lambda, dz;        // Aᵀ(·) as stacked d × d blocks, n × d each
+  Eigen::VectorXd aw, dy1, dy2, dy, step, best_step, y_trial;  // A(W), M⁻¹b, M⁻¹A(W), the dual step,
+                                                               // Δy(μ), the best point's Δy, a trial y; m each
+};
+
+// C − Aᵀ(y) into Z and its factor into the lower triangle of L; false when not positive definite.
+bool factor_slack(const Eigen::MatrixXd& C, const Eigen::VectorXd& y, const std::vector<Entry>& entries, int d,
+                  Workspace& ws, Eigen::MatrixXd& Z, Eigen::MatrixXd& L) {
+  lambda_from_y(y, entries, d, ws.lambda);
+  certificate_matrix(C, ws.lambda, d, Z);
+  if (Z.rows() <= kExactStepMaxSize) return cholesky_lower(Z, L);
+  L = Z;
+  return cholesky_in_place(L);
+}
+
+}  // namespace
+
+InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
+                                        const Eigen::MatrixXd& lambda0, double upper_bound) {
+  const int n = static_cast<int>(C.rows());
+  const auto entries = constraint_entries(n, d);
+  const int m = static_cast<int>(entries.size());
+  InteriorPointOutcome out;
+  if (n == 0) {
+    out.reason = "dual scaling: C is empty";
+    return out;
+  }
+  Eigen::VectorXd b(m), y(m);  // A(X) = b; the dual iterate
+  for (int p = 0; p < m; ++p) {
+    b[p] = entries[p].u == entries[p].v ? 1.0 : 0.0;
+    y[p] = lambda0(entries[p].u, entries[p].v % d);
+  }
+  Workspace ws(n, m, d);
+  if (!factor_slack(C, y, entries, d, ws, ws.Z, ws.Lz)) {
+    out.reason = "dual scaling: C − Λ₀ is not positive definite";
+    return out;
+  }
+  double z_bar = upper_bound;  // the objective of a feasible X: the best found, or the caller's
+  double best_mu = 0;          // X(best_mu) from best_step, best_W is the primal point of z_bar
+  bool have_primal = false;
+  const double rho = kRealPotentialWeight * n;
+  int waited = 0;  // iterations since the last better primal point (or since the start)
+  for (int it = 0; it < options.max_ipm_iterations; ++it, ++waited) {
+    if (waited >= kRealPrimalWait) {
+      out.reason = "dual scaling found no better primal point in " + std::to_string(waited) + " iterations";
+      break;
+    }
+    out.iterations = it + 1;
+    invert_lower_factor(ws.Lz, ws.Lz_inv);
+    gram_of_lower_factor(ws.Lz_inv, ws.W);
+    schur_complement(ws.W, ws.W, entries, ws.M);
+    if (!ws.schur.factor(ws.M)) {
+      out.reason = "dual scaling: its Hessian is not positive definite at iteration " + std::to_string(it);
+      break;
+    }
+    for (int p = 0; p < m; ++p) {
+      const auto [u, v] = entries[p];
+      ws.aw[p] = u == v ? ws.W(u, u) : 2.0 * ws.W(u, v);
+    }
+    ws.schur.solve(b, ws.dy1);
+    ws.schur.solve(ws.aw, ws.dy2);
+    const double dual = b.dot(y);
+    const double rel_gap = (z_bar - dual) / std::max({1e-4, std::abs(z_bar), std::abs(dual)});
+    if (have_primal && rel_gap < options.gap_tol) {
+      out.converged = true;
+      break;
+    }
+    if (have_primal && rel_gap < handoff_gap) {
+      out.handed_off = true;
+      break;
+    }
+    if (!(z_bar > dual)) {
+      out.reason = printed("dual scaling: upper bound %g is not above the dual objective %g", z_bar, dual);
+      break;
+    }
+    // The primal point at μ = (z̄ − bᵀy)/ρ: feasible when C − Aᵀ(y − Δy(μ)) ⪰ 0.
+    double mu = (z_bar - dual) / rho;
+    ws.step = ws.dy1 / mu - ws.dy2;
+    ws.y_trial = y - ws.step;
+    if (factor_slack(C, ws.y_trial, entries, d, ws, ws.trial, ws.trial_factor)) {
+      const double objective = dual + mu * (n + ws.step.dot(ws.aw));
+      if (objective < z_bar) {
+        z_bar = objective;
+        best_mu = mu;
+        ws.best_step = ws.step;
+        ws.best_W = ws.W;
+        have_primal = true;
+        waited = -1;  // (the loop's increment makes it 0)
+      }
+    }
+    // The dual step for the (possibly lowered) z̄: Z(y + αΔy) = Z − α Aᵀ(Δy).
+    mu = (z_bar - dual) / rho;
+    ws.dy = ws.dy1 / mu - ws.dy2;
+    lambda_from_y(ws.dy, entries, d, ws.dz);
+    ws.dz = -ws.dz;
+    const double alpha = ws.steps.block_diagonal(ws.Z, ws.Lz, ws.Lz_inv, ws.dz, d, kRealStepFraction);
+    if (alpha == 0.0) {
+      out.reason = "dual scaling stalled at iteration " + std::to_string(it);
+      break;
+    }
+    y += alpha * ws.dy;
+    ws.steps.take_tested(ws.Z, ws.Lz);
+  }
+  if (!out.converged && !out.handed_off && out.reason.empty())
+    out.reason = "dual scaling reached " + std::to_string(options.max_ipm_iterations) + " iterations";
+  if (!have_primal) {
+    if (out.reason.empty()) out.reason = "dual scaling found no primal point";
+    out.converged = out.handed_off = false;
+    return out;
+  }
+  // X = μ (W + W Aᵀ(Δy) W) at the best primal point, symmetric, every diagonal block I again.
+  lambda_from_y(ws.best_step, entries, d, ws.dz);
+  times_block_diagonal(ws.best_W, ws.dz, d, ws.trial);  // W Aᵀ(Δy), n × n
+  out.X.noalias() = best_mu * (ws.trial * ws.best_W);
+  out.X += best_mu * ws.best_W;
+  symmetrize(out.X);
+  unit_diagonal_blocks(out.X, d);
+  out.lambda.resize(n, d);
+  lambda_from_y(y, entries, d, out.lambda);
+  return out;
+}
+
+}  // namespace fact::sdp::detail
