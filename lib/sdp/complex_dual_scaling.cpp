@@ -58,7 +58,7 @@ constexpr int kPrimalWait = 10;
 struct Workspace {
   explicit Workspace(Eigen::Index N)
       : L(N, N), trial(N, N), L_inv(N, N), W(N, N), best_W(N, N), M(N, N), schur(N), u(N), dw(N), dy1(N), dy2(N),
-        dy(N), d(N), best_d(N), y_trial(N) {}
+        dy(N), d(N), best_d(N), y_trial(N), ones(VectorXd::Ones(N)) {}
   MatrixXcd L;      // Z = L Lᴴ, lower triangle (N × N)
   MatrixXcd trial;  // a Cholesky test's matrix, then its factor (N × N)
   MatrixXcd L_inv;  // L⁻¹, lower triangular (N × N)
@@ -68,6 +68,7 @@ struct Workspace {
   SpdSolver schur;   // M factored
   VectorXcd u;       // Lanczos scratch (N)
   VectorXd dw, dy1, dy2, dy, d, best_d, y_trial;  // diag W, M⁻¹1, M⁻¹ diag W, the dual step, Δy(μ), a trial y; N each
+  VectorXd ones;  // the dual objective's gradient 1 (N)
 };
 
 // Z = H − diag(y) factored into `factor` (its lower triangle); false when not positive definite.
@@ -112,7 +113,7 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
       break;
     }
     ws.dw = ws.W.diagonal().real();
-    ws.schur.solve(VectorXd::Ones(N), ws.dy1);
+    ws.schur.solve(ws.ones, ws.dy1);
     ws.schur.solve(ws.dw, ws.dy2);
     const double dual = y.sum();
     const double rel_gap = complex_relative_gap(z_bar - dual, z_bar, dual);
