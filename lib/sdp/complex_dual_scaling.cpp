@@ -28,6 +28,7 @@
 #include <string>
 
 #include "complex_product.h"
+#include "dual_scaling.h"
 #include "internal.h"
 #include "spd_solver.h"
 #include "step_length.h"
@@ -48,11 +49,6 @@ constexpr double kPotentialWeight = 3.0;
 // the true one, so about that fraction); the Cholesky test is what keeps Z positive definite.
 constexpr int kDualLanczosSteps = 8;
 constexpr double kStepFraction = 0.95;
-// Iterations without a better primal point after which the method gives up (the caller then runs
-// the primal–dual method): before the first one, and between two. With the loose upper bound
-// solve() gives, each of the 42 sweep instances (N = 32 … 200) handed off before it.
-constexpr int kFirstPrimalWait = 10;
-constexpr int kPrimalWait = 10;
 
 // Every matrix of one iteration, allocated once.
 struct Workspace {
@@ -94,16 +90,10 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     out.reason = "dual scaling: H − diag(y₀) is not positive definite";
     return out;
   }
-  double z_bar = upper_bound;  // the objective of a feasible X: the best found, or the caller's
-  double best_mu = 0;          // X(best_mu) with best_d, best_W is the primal point of z_bar
-  bool have_primal = false;
-  const double rho = kPotentialWeight * static_cast<double>(N);
-  int waited = 0;  // iterations since the last better primal point (or since the start)
-  for (int it = 0; it < options.max_ipm_iterations; ++it, ++waited) {
-    if (waited >= (have_primal ? kPrimalWait : kFirstPrimalWait)) {  // (before this iteration counts)
-      out.reason = "dual scaling found no better primal point in " + std::to_string(waited) + " iterations";
-      break;
-    }
+  // z̄ and the best primal point's μ; with it, best_d and best_W are that point's Δy and W.
+  DualScalingBound bound(upper_bound, kPotentialWeight * static_cast<double>(N));
+  for (int it = 0; it < options.max_ipm_iterations; ++it, bound.next_iteration()) {
+    if (bound.out_of_patience(out)) break;
     out.iterations = it + 1;
     invert_lower_factor(ws.L, ws.L_inv);
     gram_of_lower_factor(ws.L_inv, ws.W);
@@ -116,37 +106,19 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     ws.schur.solve(ws.ones, ws.dy1);
     ws.schur.solve(ws.dw, ws.dy2);
     const double dual = y.sum();
-    const double rel_gap = complex_relative_gap(z_bar - dual, z_bar, dual);
-    if (have_primal && rel_gap < options.gap_tol) {
-      out.converged = true;
-      break;
-    }
-    if (have_primal && rel_gap < handoff_gap) {
-      out.handed_off = true;
-      break;
-    }
-    if (!(z_bar > dual)) {  // (a caller's bound at or below the dual, or NaN: μ would not be positive)
-      out.reason = printed("dual scaling: upper bound %g is not above the dual objective %g", z_bar, dual);
-      break;
-    }
+    const double rel_gap = complex_relative_gap(bound.z_bar() - dual, bound.z_bar(), dual);
+    if (bound.stops(dual, rel_gap, options.gap_tol, handoff_gap, out)) break;
     // The primal point at μ = (z̄ − Σ y)/ρ: feasible when Z + diag(Δy(μ)) ⪰ 0.
-    double mu = (z_bar - dual) / rho;
+    const double mu = bound.mu(dual);
     ws.d = ws.dy1 / mu - ws.dy2;
     ws.y_trial = y - ws.d;  // Z + diag(Δy(μ)) = H − diag(y − Δy(μ))
-    if (factor_slack(H, ws.y_trial, ws.trial)) {
-      const double objective = dual + mu * (static_cast<double>(N) + ws.d.dot(ws.dw));
-      if (objective < z_bar) {
-        z_bar = objective;
-        best_mu = mu;
-        ws.best_d = ws.d;
-        ws.best_W = ws.W;
-        have_primal = true;
-        waited = -1;  // (the loop's increment makes it 0)
-      }
+    if (factor_slack(H, ws.y_trial, ws.trial) &&
+        bound.lowers(dual + mu * (static_cast<double>(N) + ws.d.dot(ws.dw)), mu)) {
+      ws.best_d = ws.d;
+      ws.best_W = ws.W;
     }
     // The dual step for the (possibly lowered) z̄, to kStepFraction of the boundary of Z − α diag(Δy) ⪰ 0.
-    mu = (z_bar - dual) / rho;
-    ws.dy = ws.dy1 / mu - ws.dy2;
+    ws.dy = ws.dy1 / bound.mu(dual) - ws.dy2;
     const double lowest = lanczos_lowest<VectorXcd>(N, kDualLanczosSteps, [&](const VectorXcd& v, VectorXcd& w) {
       dual_step_operator(ws.L_inv, ws.dy, v, ws.u, w);
     });
@@ -161,17 +133,11 @@ ComplexInteriorPointOutcome solve_complex_dual_scaling(const MatrixXcd& H, const
     y = ws.y_trial;
     std::swap(ws.L, ws.trial);
   }
-  if (!out.converged && !out.handed_off && out.reason.empty())
-    out.reason = "dual scaling reached " + std::to_string(options.max_ipm_iterations) + " iterations";
-  if (!have_primal) {
-    if (out.reason.empty()) out.reason = "dual scaling found no primal point";
-    out.converged = out.handed_off = false;
-    return out;
-  }
+  if (!bound.found_primal(out, options.max_ipm_iterations)) return out;
   // X = μ (W + W diag(Δy) W) at the best primal point, made exactly Hermitian with unit diagonal.
   MatrixXcd WD = ws.best_W * ws.best_d.cast<std::complex<double>>().asDiagonal();  // W diag(Δy), N × N
-  multiply(WD, ws.best_W, out.X, best_mu, false);
-  out.X += best_mu * ws.best_W;
+  multiply(WD, ws.best_W, out.X, bound.best_mu(), false);
+  out.X += bound.best_mu() * ws.best_W;
   hermitian_part(out.X);
   rescale_to_unit_diagonal(out.X);
   out.y = y;

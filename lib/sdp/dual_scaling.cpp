@@ -24,6 +24,7 @@
 #include <cmath>
 #include <string>
 
+#include "dual_scaling.h"
 #include "internal.h"
 #include "spd_solver.h"
 #include "step_length.h"
@@ -39,9 +40,6 @@ constexpr double kRealPotentialWeight = 5.0;
 // The dual step's fraction of the boundary of Z − α Aᵀ(Δy) ⪰ 0 (StepLength confirms it by a
 // Cholesky test).
 constexpr double kRealStepFraction = 0.95;
-// Iterations without a better primal point after which the method gives up: before the first one,
-// and between two.
-constexpr int kRealPrimalWait = 10;
 
 // Every matrix of one iteration, allocated once (n = C's size, m = constraints, d = block size).
 struct Workspace {
@@ -92,16 +90,10 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
     out.reason = "dual scaling: C − Λ₀ is not positive definite";
     return out;
   }
-  double z_bar = upper_bound;  // the objective of a feasible X: the best found, or the caller's
-  double best_mu = 0;          // X(best_mu) from best_step, best_W is the primal point of z_bar
-  bool have_primal = false;
-  const double rho = kRealPotentialWeight * n;
-  int waited = 0;  // iterations since the last better primal point (or since the start)
-  for (int it = 0; it < options.max_ipm_iterations; ++it, ++waited) {
-    if (waited >= kRealPrimalWait) {
-      out.reason = "dual scaling found no better primal point in " + std::to_string(waited) + " iterations";
-      break;
-    }
+  // z̄ and the best primal point's μ; with it, best_step and best_W are that point's Δy and W.
+  DualScalingBound bound(upper_bound, kRealPotentialWeight * n);
+  for (int it = 0; it < options.max_ipm_iterations; ++it, bound.next_iteration()) {
+    if (bound.out_of_patience(out)) break;
     out.iterations = it + 1;
     invert_lower_factor(ws.Lz, ws.Lz_inv);
     gram_of_lower_factor(ws.Lz_inv, ws.W);
@@ -117,37 +109,20 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
     ws.schur.solve(b, ws.dy1);
     ws.schur.solve(ws.aw, ws.dy2);
     const double dual = b.dot(y);
+    const double z_bar = bound.z_bar();
     const double rel_gap = (z_bar - dual) / std::max({1e-4, std::abs(z_bar), std::abs(dual)});
-    if (have_primal && rel_gap < options.gap_tol) {
-      out.converged = true;
-      break;
-    }
-    if (have_primal && rel_gap < handoff_gap) {
-      out.handed_off = true;
-      break;
-    }
-    if (!(z_bar > dual)) {
-      out.reason = printed("dual scaling: upper bound %g is not above the dual objective %g", z_bar, dual);
-      break;
-    }
+    if (bound.stops(dual, rel_gap, options.gap_tol, handoff_gap, out)) break;
     // The primal point at μ = (z̄ − bᵀy)/ρ: feasible when C − Aᵀ(y − Δy(μ)) ⪰ 0.
-    double mu = (z_bar - dual) / rho;
+    const double mu = bound.mu(dual);
     ws.step = ws.dy1 / mu - ws.dy2;
     ws.y_trial = y - ws.step;
-    if (factor_slack(C, ws.y_trial, entries, d, ws, ws.trial, ws.trial_factor)) {
-      const double objective = dual + mu * (n + ws.step.dot(ws.aw));
-      if (objective < z_bar) {
-        z_bar = objective;
-        best_mu = mu;
-        ws.best_step = ws.step;
-        ws.best_W = ws.W;
-        have_primal = true;
-        waited = -1;  // (the loop's increment makes it 0)
-      }
+    if (factor_slack(C, ws.y_trial, entries, d, ws, ws.trial, ws.trial_factor) &&
+        bound.lowers(dual + mu * (n + ws.step.dot(ws.aw)), mu)) {
+      ws.best_step = ws.step;
+      ws.best_W = ws.W;
     }
     // The dual step for the (possibly lowered) z̄: Z(y + αΔy) = Z − α Aᵀ(Δy).
-    mu = (z_bar - dual) / rho;
-    ws.dy = ws.dy1 / mu - ws.dy2;
+    ws.dy = ws.dy1 / bound.mu(dual) - ws.dy2;
     lambda_from_y(ws.dy, entries, d, ws.dz);
     ws.dz = -ws.dz;
     const double alpha = ws.steps.block_diagonal(ws.Z, ws.Lz, ws.Lz_inv, ws.dz, d, kRealStepFraction);
@@ -158,18 +133,12 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
     y += alpha * ws.dy;
     ws.steps.take_tested(ws.Z, ws.Lz);
   }
-  if (!out.converged && !out.handed_off && out.reason.empty())
-    out.reason = "dual scaling reached " + std::to_string(options.max_ipm_iterations) + " iterations";
-  if (!have_primal) {
-    if (out.reason.empty()) out.reason = "dual scaling found no primal point";
-    out.converged = out.handed_off = false;
-    return out;
-  }
+  if (!bound.found_primal(out, options.max_ipm_iterations)) return out;
   // X = μ (W + W Aᵀ(Δy) W) at the best primal point, symmetric, every diagonal block I again.
   lambda_from_y(ws.best_step, entries, d, ws.dz);
   times_block_diagonal(ws.best_W, ws.dz, d, ws.trial);  // W Aᵀ(Δy), n × n
-  out.X.noalias() = best_mu * (ws.trial * ws.best_W);
-  out.X += best_mu * ws.best_W;
+  out.X.noalias() = bound.best_mu() * (ws.trial * ws.best_W);
+  out.X += bound.best_mu() * ws.best_W;
   symmetrize(out.X);
   unit_diagonal_blocks(out.X, d);
   out.lambda.resize(n, d);
