@@ -377,21 +377,6 @@ TEST(SdpComplexDualScaling, GivesUpWhenNoPrimalPointBeatsTheBound) {
   EXPECT_NE(stuck.reason.find("no better primal point"), std::string::npos) << stuck.reason;
 }
 
-// The real interior point's cold start for dual scaling: Λ₀ = −s·I (s = cold_start_shift), n × 2.
-Eigen::MatrixXd cold_lambda(const Eigen::MatrixXd& C) {
-  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(C.rows(), 2);
-  const double shift = fact::sdp::detail::cold_start_shift(C);
-  for (Eigen::Index i = 0; i < C.rows(); i += 2) lambda.middleRows(i, 2).diagonal().setConstant(-shift);
-  return lambda;
-}
-
-// tr Λ for Λ_ii stacked (n × 2): the dual objective.
-double dual_objective(const Eigen::MatrixXd& lambda) {
-  double sum = 0;
-  for (Eigen::Index i = 0; i < lambda.rows(); i += 2) sum += lambda(i, 0) + lambda(i + 1, 1);
-  return sum;
-}
-
 // The primal–dual method resumed from `handed` converges to the optimum of the uninterrupted
 // run `whole`, within the gaps both reached.
 void expect_real_resumes_to(const Eigen::MatrixXd& C, const InteriorPointOutcome& handed,
@@ -401,7 +386,7 @@ void expect_real_resumes_to(const Eigen::MatrixXd& C, const InteriorPointOutcome
   expect_feasible(rest);
   EXPECT_LT(gap_of(C, rest), 1e-9);
   EXPECT_NEAR(C.cwiseProduct(rest.X).sum(), C.cwiseProduct(whole.X).sum(), 1e-9);
-  EXPECT_NEAR(dual_objective(rest.lambda), dual_objective(whole.lambda), 1e-9);
+  EXPECT_NEAR(fact::sdp::detail::block_trace(rest.lambda, 2), fact::sdp::detail::block_trace(whole.lambda, 2), 1e-9);
 }
 
 // Real dual scaling from the cold start, with tr C = ⟨C, I⟩ as its upper bound (as solve() runs it
@@ -420,7 +405,7 @@ TEST(SdpDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
   for (const auto& [name, C] : costs) {
     SCOPED_TRACE(name);
     const Options o;
-    const Eigen::MatrixXd lambda0 = cold_lambda(C);
+    const Eigen::MatrixXd lambda0 = fact::sdp::detail::cold_start_lambda(C, 2);
     const InteriorPointOutcome scaled = fact::sdp::detail::solve_dual_scaling(C, 2, o, 1e-5, lambda0, C.trace());
     ASSERT_TRUE(scaled.handed_off) << scaled.reason;
     EXPECT_FALSE(scaled.converged);
@@ -447,6 +432,85 @@ TEST(SdpDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
   }
 }
 
+// Dual scaling hands off at the first iterate whose true relative gap (⟨C, X⟩ of the X it returns
+// against tr Λ) is below the hand-off gap h: run with one iteration fewer than it took it returns
+// the same pair, and with two fewer a pair whose gap is still at least h. This checks the O(m)
+// objective of its primal points, which decides when to hand off, against ⟨C, X⟩ formed in full.
+TEST(SdpDualScaling, HandsOffAtTheFirstPairWhoseTrueGapIsBelowTheHandOffGap) {
+  std::mt19937 rng(43);
+  std::normal_distribution<double> gauss;
+  const std::pair<const char*, Eigen::MatrixXd> costs[] = {
+      {"random full rank n = 16", scaled_random_psd(16, 16, rng, gauss)},
+      {"random full rank n = 64", scaled_random_psd(64, 64, rng, gauss)},
+      {"random full rank n = 128", scaled_random_psd(128, 128, rng, gauss)},
+      {"plain N = 30", scaled_plain_cost(30, 9)},
+  };
+  using fact::sdp::detail::solve_dual_scaling;
+  for (const auto& [name, C] : costs) {
+    const Eigen::MatrixXd lambda0 = fact::sdp::detail::cold_start_lambda(C, 2);
+    for (const double h : {1e-1, 1e-2, 1e-3, 1e-4, 1e-5}) {
+      SCOPED_TRACE(testing::Message() << name << ", h = " << h);
+      const InteriorPointOutcome handed = solve_dual_scaling(C, 2, Options{}, h, lambda0, C.trace());
+      ASSERT_TRUE(handed.handed_off) << handed.reason;
+      ASSERT_GE(handed.iterations, 3);
+      Options capped;
+      capped.max_ipm_iterations = handed.iterations - 1;
+      const InteriorPointOutcome last = solve_dual_scaling(C, 2, capped, h, lambda0, C.trace());
+      EXPECT_EQ((last.X - handed.X).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ((last.lambda - handed.lambda).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_LT(gap_of(C, handed), h * (1 + 1e-6));
+      capped.max_ipm_iterations = handed.iterations - 2;
+      const InteriorPointOutcome before = solve_dual_scaling(C, 2, capped, h, lambda0, C.trace());
+      ASSERT_EQ(before.X.rows(), C.rows()) << before.reason;
+      EXPECT_GE(gap_of(C, before), h * (1 - 1e-6));
+    }
+  }
+}
+
+// The interior point without a warm start: dual scaling alone when it hands off; when it gives up
+// after finding a primal point (the paper's noise-free cost at N = 12, optimum near 0, seed 2) the
+// primal–dual method resumed from its pair, and without one (N = 1: X = I is the only feasible
+// point, which its upper bound already is) the primal–dual method from X = I; the iterations of
+// both count.
+TEST(SdpDualScaling, ThenTheInteriorPointWhenItGivesUp) {
+  using fact::sdp::detail::dual_scaling_then_interior_point;
+  using fact::sdp::detail::solve_dual_scaling;
+  const Options o;
+  std::mt19937 rng(59);
+  std::normal_distribution<double> gauss;
+
+  const Eigen::MatrixXd full = scaled_random_psd(64, 64, rng, gauss);
+  const InteriorPointOutcome alone =
+      solve_dual_scaling(full, 2, o, 1e-5, fact::sdp::detail::cold_start_lambda(full, 2), full.trace());
+  ASSERT_TRUE(alone.handed_off) << alone.reason;
+  const InteriorPointOutcome handed = dual_scaling_then_interior_point(full, 2, o, 1e-5);
+  EXPECT_TRUE(handed.handed_off);
+  EXPECT_EQ(handed.iterations, alone.iterations);
+  EXPECT_EQ((handed.X - alone.X).cwiseAbs().maxCoeff(), 0.0);
+
+  Eigen::MatrixXd C = fact::test::plain_cost(12, 13, 0.0, 2);
+  C /= C.norm();
+  const InteriorPointOutcome gave_up =
+      solve_dual_scaling(C, 2, o, 1e-5, fact::sdp::detail::cold_start_lambda(C, 2), C.trace());
+  ASSERT_FALSE(gave_up.handed_off || gave_up.converged);
+  ASSERT_EQ(gave_up.X.rows(), C.rows()) << gave_up.reason;
+  const InteriorPointOutcome resumed = solve_interior_point(C, 2, o, 1e-5, &gave_up);
+  const InteriorPointOutcome both = dual_scaling_then_interior_point(C, 2, o, 1e-5);
+  EXPECT_TRUE(both.handed_off || both.converged) << both.reason;
+  EXPECT_EQ(both.iterations, gave_up.iterations + resumed.iterations);
+  EXPECT_EQ((both.X - resumed.X).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(gap_of(C, both), 1e-5);
+
+  const Eigen::MatrixXd one = scaled_random_psd(2, 2, rng, gauss);
+  const InteriorPointOutcome none =
+      solve_dual_scaling(one, 2, o, 1e-5, fact::sdp::detail::cold_start_lambda(one, 2), one.trace());
+  ASSERT_EQ(none.X.size(), 0);
+  const InteriorPointOutcome cold = solve_interior_point(one, 2, o, 1e-5);
+  const InteriorPointOutcome fallback = dual_scaling_then_interior_point(one, 2, o, 1e-5);
+  EXPECT_EQ(fallback.iterations, none.iterations + cold.iterations);
+  EXPECT_EQ((fallback.X - cold.X).cwiseAbs().maxCoeff(), 0.0);
+}
+
 // Real dual scaling refuses an empty C, an infeasible start and an upper bound that is not above
 // tr Λ₀ (or NaN), and gives up, with no X and neither flag, when no primal point can beat its
 // upper bound (the optimum itself).
@@ -455,7 +519,7 @@ TEST(SdpDualScaling, RefusesWhatItCannotStartFromAndGivesUpBelowTheOptimum) {
   std::normal_distribution<double> gauss;
   const Eigen::MatrixXd C = scaled_random_psd(24, 24, rng, gauss);
   const Options o;
-  const Eigen::MatrixXd lambda0 = cold_lambda(C);
+  const Eigen::MatrixXd lambda0 = fact::sdp::detail::cold_start_lambda(C, 2);
   using fact::sdp::detail::solve_dual_scaling;
 
   const InteriorPointOutcome empty = solve_dual_scaling(Eigen::MatrixXd(), 2, o, 1e-5, Eigen::MatrixXd(), 1.0);
@@ -468,7 +532,7 @@ TEST(SdpDualScaling, RefusesWhatItCannotStartFromAndGivesUpBelowTheOptimum) {
   EXPECT_EQ(infeasible.X.size(), 0);
   EXPECT_NE(infeasible.reason.find("not positive definite"), std::string::npos) << infeasible.reason;
 
-  const double dual = dual_objective(lambda0);
+  const double dual = fact::sdp::detail::block_trace(lambda0, 2);
   for (const double bound : {dual - 1.0, dual, std::numeric_limits<double>::quiet_NaN()}) {
     SCOPED_TRACE(testing::Message() << "upper bound " << bound);
     const InteriorPointOutcome below = solve_dual_scaling(C, 2, o, 1e-5, lambda0, bound);

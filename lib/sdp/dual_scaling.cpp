@@ -13,12 +13,12 @@
 // test), and ⟨C, X(μ)⟩ = bᵀy + μ (n + Δyᵀ A(W)), an O(m) sum. Only the best primal point's W and
 // Δy are kept; X is formed once, at the end.
 //
-// Against the primal–dual interior point (interior_point.cpp) an iteration has no n × n products,
-// no primal factor and one step length instead of four: Z⁻¹ by its factor, the m × m Hessian and
-// its Cholesky factor (m = 3N for d = 2, the largest piece), the primal test and the dual step's
-// test. From the cold start it takes 13–17 iterations to a relative gap of 1e-5 on random
-// full-rank C (N = 8 … 100) against the primal–dual method's 8–11, at about half the cost each
-// (BENCHMARKS.md, session 38). Where the optimum is near 0 (the floor 1e-4 of the relative gap then
+// Against the primal–dual interior point (interior_point.cpp) an iteration has no direction
+// products P·W, no primal factor and one step length instead of four (its exact form, n ≤ 48,
+// still forms L⁻¹ΔL⁻ᵀ): Z⁻¹ by its factor, the m × m Hessian and its Cholesky factor (m = 3N for
+// d = 2, the largest piece), the primal test and the dual step's test. From the cold start it takes
+// 12–18 iterations to a relative gap of 1e-5 on random full-rank C (N = 8 … 100) against the
+// primal–dual method's 8–12, at about half the cost each (BENCHMARKS.md, session 38). Where the optimum is near 0 (the floor 1e-4 of the relative gap then
 // asks for an absolute gap of 1e-9) it needed 26–32 iterations against 13.
 #include <algorithm>
 #include <cmath>
@@ -144,6 +144,18 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
   out.lambda.resize(n, d);
   lambda_from_y(y, entries, d, out.lambda);
   return out;
+}
+
+InteriorPointOutcome dual_scaling_then_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
+                                                      double handoff_gap) {
+  InteriorPointOutcome ip = solve_dual_scaling(C, d, options, handoff_gap, cold_start_lambda(C, d), C.trace());
+  if (ip.handed_off || ip.converged) return ip;
+  // solve_interior_point counts only its own iterations; resumed, its budget starts after dual
+  // scaling's.
+  const int scaling_iterations = ip.iterations;
+  ip = solve_interior_point(C, d, options, handoff_gap, ip.X.size() > 0 ? &ip : nullptr);
+  ip.iterations += scaling_iterations;
+  return ip;
 }
 
 }  // namespace fact::sdp::detail

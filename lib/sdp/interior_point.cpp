@@ -304,6 +304,13 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
   return cholesky_in_place(Z) ? shift : 2.0;
 }
 
+Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
+  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(C.rows(), d);
+  const double shift = cold_start_shift(C);
+  for (Eigen::Index i = 0; i < C.rows(); i += d) lambda.middleRows(i, d).diagonal().setConstant(-shift);
+  return lambda;
+}
+
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
                     double mix, InteriorPointOutcome& start) {
   const Eigen::Index n = C.rows();

@@ -373,7 +373,7 @@ struct InteriorPointOutcome {
   Eigen::MatrixXd X;        // n × n primal
   Eigen::MatrixXd lambda;   // n × d dual multipliers, Λ_ii stacked
   int iterations = 0;
-  bool converged = false;   // relative gap below 0.1·gap_tol
+  bool converged = false;   // relative gap below 0.1·gap_tol (solve_dual_scaling: below gap_tol)
   bool handed_off = false;  // stopped at the handoff gap, before convergence (X, lambda resume it)
   std::string reason;       // why it stopped when not converged
 };
@@ -387,6 +387,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
 
 // The interior point's cold start's dual shift s (Λ = −s·I, Z = C + s·I ≻ 0) for C scaled to ‖C‖_F = 1.
 double cold_start_shift(const Eigen::MatrixXd& C);
+// That start's multipliers Λ = −s·I as d × d blocks stacked (n × d).
+Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d);
 
 // X ← D^{-1/2} X D^{-1/2} with D = blkdiag(X_ii) (X n × n symmetric PSD, d × d blocks): every
 // diagonal block I again after rounding drift, positive definiteness kept.
@@ -402,6 +404,14 @@ void unit_diagonal_blocks(Eigen::MatrixXd& X, int d);
 // empty. Neither flag is set when it gave up.
 InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
                                         const Eigen::MatrixXd& lambda0, double upper_bound);
+
+// The interior point without a warm start, to handoff_gap (automatic mode in solve()): dual
+// scaling from the cold start (cold_start_lambda, with tr C = ⟨C, I⟩ as the upper bound), and the
+// primal–dual method when it gives up: from its pair when it found a primal point, else from
+// X = I. iterations counts both methods' (the resumed primal–dual run counts from dual scaling's,
+// so max_ipm_iterations bounds them together when it resumes).
+InteriorPointOutcome dual_scaling_then_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
+                                                      double handoff_gap);
 
 // A strictly feasible start for the interior point from a factor Y (n × r, orthonormal-row d × r
 // blocks) of a point near the optimum and its multipliers lambda (n × d, Λ_ii stacked; the

@@ -400,31 +400,6 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   return with_one_more_step(C, d, std::move(c), o);
 }
 
-// The interior point's first part, to the hand-off, without a warm start (automatic mode): dual
-// scaling (dual_scaling.cpp) from the cold start's Λ = −s·I, with ⟨C, I⟩ = tr C, the objective of
-// the feasible X = I, as its upper bound; the primal–dual method when it gives up, from its pair
-// when it found a primal point (the resumed run counts its iterations), else from X = I. Dual
-// scaling takes more iterations to the hand-off (random full rank N = 25 … 100: 13–17 against
-// 10–11) at about half the cost each (no n × n products, no primal factor or step length):
-// 0.66–0.85 of the solve's time there, the same statuses and optima. From the rank-d attempt's
-// warm start (n ≤ kWarmStartMaxRows) it gained 10–15 % on random full-rank C and plain_noisy
-// N = 5 but lost up to 29 % where the optimum is near 0 (plain and the paper's cost at N = 12:
-// 26–32 iterations against 13), so the warm start keeps the primal–dual method (BENCHMARKS.md,
-// session 38).
-detail::InteriorPointOutcome cold_dual_scaling(const Eigen::MatrixXd& C, int d, const Options& o, double handoff) {
-  const Eigen::Index n = C.rows();
-  Eigen::MatrixXd lambda0 = Eigen::MatrixXd::Zero(n, d);  // Λ₀ = −s·I, blocks stacked (n × d)
-  const double shift = detail::cold_start_shift(C);
-  for (Eigen::Index i = 0; i < n; i += d) lambda0.middleRows(i, d).diagonal().setConstant(-shift);
-  detail::InteriorPointOutcome ip = detail::solve_dual_scaling(C, d, o, handoff, lambda0, C.trace());
-  if (ip.handed_off || ip.converged) return ip;
-  const bool resumable = ip.X.size() > 0;
-  const int wasted = resumable ? 0 : ip.iterations;
-  ip = detail::solve_interior_point(C, d, o, handoff, resumable ? &ip : nullptr);
-  ip.iterations += wasted;
-  return ip;
-}
-
 // The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
 // multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
 // finds no dual shift or the warm run stalls); above, the warm start measured 0 … +20 % slower
@@ -433,7 +408,13 @@ detail::InteriorPointOutcome cold_dual_scaling(const Eigen::MatrixXd& C, int d, 
 // N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
 // off at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
 // stopped when the polish does not certify. Without a warm start, in automatic mode, dual scaling
-// takes the part to the hand-off (cold_dual_scaling).
+// takes the part to the hand-off (dual_scaling_then_interior_point). Dual scaling takes more
+// iterations to the hand-off (random full rank N = 8 … 100: 12–18 against 8–12) at about half the
+// cost each: 0.66–0.85 of the solve's time at N = 25 … 100, the same statuses and optima. From
+// the rank-d attempt's warm start (n ≤ kWarmStartMaxRows) it gained 10–15 % on random full-rank C
+// and plain_noisy N = 5 but lost up to 40 % where the optimum is near 0 (plain and the paper's
+// cost at N = 12: 26–32 iterations against 13), so the warm start keeps the primal–dual method
+// (BENCHMARKS.md, session 38).
 Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form,
                               const Candidate* warm = nullptr) {
   const int n = static_cast<int>(C.rows());
@@ -443,7 +424,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
   detail::InteriorPointOutcome ip = !warm_start && o.method == Method::automatic
-                                        ? cold_dual_scaling(C, d, o, handoff)
+                                        ? detail::dual_scaling_then_interior_point(C, d, o, handoff)
                                         : detail::solve_interior_point(C, d, o, handoff, warm_start ? &start : nullptr);
   if (warm_start && !ip.handed_off && !ip.converged) {  // the warm start stalled: start cold
     const int wasted = ip.iterations;
