@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
 
 
 #include "complex_product.h"
@@ -389,19 +390,25 @@ void expect_real_resumes_to(const Eigen::MatrixXd& C, const InteriorPointOutcome
   EXPECT_NEAR(fact::sdp::detail::block_trace(rest.lambda, 2), fact::sdp::detail::block_trace(whole.lambda, 2), 1e-9);
 }
 
+// Random full-rank C (optimum of high rank) of 16, 64 and 128 rows and the paper's plain cost at
+// N = 30, scaled, each with a name.
+std::vector<std::pair<const char*, Eigen::MatrixXd>> dual_scaling_test_costs() {
+  std::mt19937 rng(43);
+  std::normal_distribution<double> gauss;
+  std::vector<std::pair<const char*, Eigen::MatrixXd>> costs;
+  costs.emplace_back("random full rank n = 16", scaled_random_psd(16, 16, rng, gauss));
+  costs.emplace_back("random full rank n = 64", scaled_random_psd(64, 64, rng, gauss));
+  costs.emplace_back("random full rank n = 128", scaled_random_psd(128, 128, rng, gauss));
+  costs.emplace_back("plain N = 30", scaled_plain_cost(30, 9));
+  return costs;
+}
+
 // Real dual scaling from the cold start, with tr C = ⟨C, I⟩ as its upper bound (as solve() runs it
 // without a warm start), on random full-rank C (optimum of high rank) and on the paper's plain
 // cost: a strictly feasible pair within the hand-off gap, which the primal–dual method finishes at
 // the optimum of its own uninterrupted run; stopped early it still returns its pair.
 TEST(SdpDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
-  std::mt19937 rng(43);
-  std::normal_distribution<double> gauss;
-  const std::pair<const char*, Eigen::MatrixXd> costs[] = {
-      {"random full rank n = 16", scaled_random_psd(16, 16, rng, gauss)},
-      {"random full rank n = 64", scaled_random_psd(64, 64, rng, gauss)},
-      {"random full rank n = 128", scaled_random_psd(128, 128, rng, gauss)},
-      {"plain N = 30", scaled_plain_cost(30, 9)},
-  };
+  const auto costs = dual_scaling_test_costs();
   for (const auto& [name, C] : costs) {
     SCOPED_TRACE(name);
     const Options o;
@@ -437,14 +444,7 @@ TEST(SdpDualScaling, HandsOffAFeasiblePairThePrimalDualMethodFinishes) {
 // the same pair, and with two fewer a pair whose gap is still at least h. This checks the O(m)
 // objective of its primal points, which decides when to hand off, against ⟨C, X⟩ formed in full.
 TEST(SdpDualScaling, HandsOffAtTheFirstPairWhoseTrueGapIsBelowTheHandOffGap) {
-  std::mt19937 rng(43);
-  std::normal_distribution<double> gauss;
-  const std::pair<const char*, Eigen::MatrixXd> costs[] = {
-      {"random full rank n = 16", scaled_random_psd(16, 16, rng, gauss)},
-      {"random full rank n = 64", scaled_random_psd(64, 64, rng, gauss)},
-      {"random full rank n = 128", scaled_random_psd(128, 128, rng, gauss)},
-      {"plain N = 30", scaled_plain_cost(30, 9)},
-  };
+  const auto costs = dual_scaling_test_costs();
   using fact::sdp::detail::solve_dual_scaling;
   for (const auto& [name, C] : costs) {
     const Eigen::MatrixXd lambda0 = fact::sdp::detail::cold_start_lambda(C, 2);
