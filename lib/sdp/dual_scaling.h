@@ -22,7 +22,6 @@ class DualScalingBound {
 
   double z_bar() const { return z_bar_; }
   double mu(double dual) const { return (z_bar_ - dual) / rho_; }
-  bool have_primal() const { return have_primal_; }
   double best_mu() const { return best_mu_; }  // μ of the primal point whose objective is z̄
 
   // Before an iteration: true, with the reason in out, once kDualScalingPatience iterations have

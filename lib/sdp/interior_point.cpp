@@ -155,7 +155,6 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
   return value;
 }
 
-
 // The real interior point's centring exponent (mehrotra_centring): 2 up to kSquareCentringMaxSize
 // rows (N = 24), the usual 3 above. Sweep (6 seeds, N = 5 … 32, two runs), 2 against 3: plain /
 // low rank / random full rank / the paper's cost 0.85–0.97 of the time at N = 5 … 16 and
