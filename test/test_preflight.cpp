@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -44,6 +45,8 @@ struct Hardware {
   double roll = 0;                   // rad
   bool frozen = false;               // the same seq and utime again and again
   int64_t odometry_offset_us = 0;    // odometry clock − camera clock
+  bool extreme_clocks = false;       // frames from INT64_MAX − 0.2 s, odometry from INT64_MIN + 0.2 s,
+                                     // both advancing 1 ms a message
 };
 
 class Preflight : public fact::test::TempDirTest {
@@ -59,8 +62,9 @@ class Preflight : public fact::test::TempDirTest {
                              dir_ / "out", dir_ / "out");
     EXPECT_TRUE(p.started());
     const int64_t t0 = 1700000000000000;
-    for (int k = 0; p.running() && k < 400; ++k) {
-      const int64_t t = t0 + k * 50000;  // µs
+    for (int k = 0; p.running() && k < 150; ++k) {
+      const int64_t t = hw.extreme_clocks ? std::numeric_limits<int64_t>::max() - 200000 + k * 1000
+                                          : t0 + k * 50000;  // µs
       fact::fc_state_t fc{};
       fc.utime = t;
       fc.drone_id = hw.fc_drone;
@@ -70,7 +74,8 @@ class Preflight : public fact::test::TempDirTest {
       lcm.publish("FACT_FC_STATE_3", &fc);
       fact::odometry_t o{};
       const bool restarted = hw.restart_at >= 0 && k >= hw.restart_at;
-      o.utime = (hw.frozen ? t0 : t) + hw.odometry_offset_us;
+      o.utime = hw.extreme_clocks ? std::numeric_limits<int64_t>::min() + 200000 + k * 1000
+                                  : (hw.frozen ? t0 : t) + hw.odometry_offset_us;
       o.seq = hw.frozen ? 0 : restarted ? k - hw.restart_at : k;
       o.drone_id = hw.odometry_drone;
       o.position[2] = 1.0;
@@ -129,6 +134,9 @@ TEST_F(Preflight, WhatTheAppsWouldRefuseFailsItsItemNamingIt) {
       {"NaN roll", [](Hardware& h) { h.roll = std::nan(""); }, "roll = nan (must be finite)"},
       {"frozen VIO", [](Hardware& h) { h.frozen = true; }, "not increasing (a frozen or repeating VIO)"},
       {"VIO on the boot clock", [](Hardware& h) { h.odometry_offset_us = -1699990000000000; },
+       "the VIO and the camera are on different clocks"},
+      // 2^64 − 0.4 s apart: the stamps' int64 difference wraps to 0.4 s, which once passed.
+      {"clocks at the ends of int64", [](Hardware& h) { h.extreme_clocks = true; },
        "the VIO and the camera are on different clocks"},
   };
   for (const Case& c : cases) {
