@@ -64,9 +64,7 @@ bool factor_slack(const Eigen::MatrixXd& C, const Eigen::VectorXd& y, const std:
                   Workspace& ws, Eigen::MatrixXd& Z, Eigen::MatrixXd& L) {
   lambda_from_y(y, entries, d, ws.lambda);
   certificate_matrix(C, ws.lambda, d, Z);
-  if (Z.rows() <= kExactStepMaxSize) return cholesky_lower(Z, L);
-  L = Z;
-  return cholesky_in_place(L);
+  return factor_lower(Z, L);
 }
 
 }  // namespace
@@ -110,8 +108,7 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
     ws.schur.solve(b, ws.dy1);
     ws.schur.solve(ws.aw, ws.dy2);
     const double dual = b.dot(y);
-    const double z_bar = bound.z_bar();
-    const double rel_gap = (z_bar - dual) / std::max({1e-4, std::abs(z_bar), std::abs(dual)});
+    const double rel_gap = relative_gap(bound.z_bar() - dual, bound.z_bar(), dual);
     if (bound.stops(dual, rel_gap, options.gap_tol, handoff_gap, out)) break;
     // The primal point at μ = (z̄ − bᵀy)/ρ: feasible when C − Aᵀ(y − Δy(μ)) ⪰ 0.
     const double mu = bound.mu(dual);

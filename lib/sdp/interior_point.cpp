@@ -118,14 +118,6 @@ struct Workspace {
                                                // factor the next X and Z (take_tested)
 };
 
-// Cholesky factors of X and Z into ws.Lx, ws.Lz: plain loops for small n, Eigen's blocked kernel
-// otherwise.
-bool factorize(const Eigen::MatrixXd& X, const Eigen::MatrixXd& Z, bool small, Workspace& ws) {
-  if (small) return cholesky_lower(Z, ws.Lz) && cholesky_lower(X, ws.Lx);
-  ws.Lz = Z;
-  ws.Lx = X;
-  return cholesky_in_place(ws.Lz) && cholesky_in_place(ws.Lx);
-}
 
 // The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n). With
 // `accurate`, P W is formed as (P Lz⁻ᵀ) Lz⁻¹ (one more n × n product): near the optimum W's
@@ -177,7 +169,6 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
 
   InteriorPointOutcome out;
   Workspace ws(n, m, d);
-  const bool exact_steps = n <= kExactStepMaxSize;
   const bool invert_x = n <= kInverseLanczosMaxSize;  // L⁻¹ of X: only the step lengths use it
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
   Eigen::VectorXd y(m);                                  // dual, m
@@ -206,7 +197,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     out.iterations = it + 1 - done;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
     const double gap = X.cwiseProduct(Z).sum();
-    const double rel_gap = gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
+    const double rel_gap = relative_gap(gap, primal, dual);
     bool improved = false;
     const GapRule::Verdict verdict = rule.next(gap, rel_gap, improved);
     if (improved) {
@@ -216,7 +207,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     if (rule.stops(verdict, "interior point", it + 1, out)) break;
     const double mu = gap / n;
     const bool accurate = rel_gap < kAccurateDirectionGap;
-    if (!factored && !factorize(X, Z, exact_steps, ws)) {
+    if (!factored && !(factor_lower(Z, ws.Lz) && factor_lower(X, ws.Lx))) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }

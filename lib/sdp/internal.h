@@ -369,6 +369,13 @@ class GapRule {
   Verdict last_ = Verdict::go_on;
 };
 
+// Gap relative to the objective, on the scaled problem (‖C‖_F = 1): gap over
+// max(1e-4, |primal|, |dual|), the floor keeping zero-optimum (noise-free) problems from
+// dividing by nothing. solve()'s certificate, the real interior point and dual scaling.
+inline double relative_gap(double gap, double primal, double dual) {
+  return gap / std::max({1e-4, std::abs(primal), std::abs(dual)});
+}
+
 struct InteriorPointOutcome {
   Eigen::MatrixXd X;        // n × n primal
   Eigen::MatrixXd lambda;   // n × d dual multipliers, Λ_ii stacked
@@ -571,8 +578,8 @@ void hermitian_part(Eigen::MatrixXcd& A);
 // X ← D^{-1/2} X D^{-1/2} with D = diag(X) (X N × N Hermitian PSD): a unit diagonal again after
 // rounding drift, positive definiteness kept.
 void rescale_to_unit_diagonal(Eigen::MatrixXcd& X);
-// The complex interior points' relative gap: gap over max(0.5e-4, |primal|, |dual|), the floor
-// half of the d = 2 problem's 1e-4 since its objective is twice this one's.
+// The complex interior points' relative gap (relative_gap's): gap over max(0.5e-4, |primal|, |dual|),
+// the floor half of the d = 2 problem's 1e-4 since its objective is twice this one's.
 inline double complex_relative_gap(double gap, double primal, double dual) {
   return gap / std::max({0.5e-4, std::abs(primal), std::abs(dual)});
 }

@@ -106,11 +106,8 @@ struct Candidate {
   std::string note;       // why the method stopped, when it did not converge
 };
 
-// Gap relative to the objective, on the scaled problem (‖C‖_F = 1); the floor 1e-4 keeps
-// zero-optimum (noise-free) problems from dividing by nothing.
-double relative_gap(double primal, double dual) {
-  return (primal - dual) / std::max({1e-4, std::abs(primal), std::abs(dual)});
-}
+// The relative gap (detail::relative_gap) of a primal objective and a dual bound.
+double relative_gap(double primal, double dual) { return detail::relative_gap(primal - dual, primal, dual); }
 
 // ⟨C, Y Yᵀ⟩ for a feasible Y (every block of Y Yᵀ is I), computed as tr Λ + ⟨S, Y Yᵀ⟩.
 // The two are equal in exact arithmetic; the second has no cancellation, because S and

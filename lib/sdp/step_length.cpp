@@ -433,11 +433,13 @@ double StepLength::from_min_eigenvalue_of_B(double tau) {
   return std::min(1.0, tau / -lo);
 }
 
-bool StepLength::positive_definite() {
-  if (trial_.rows() <= kExactStepMaxSize) return cholesky_lower(trial_, trial_factor_);
-  trial_factor_ = trial_;
-  return cholesky_in_place(trial_factor_);
+bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
+  if (A.rows() <= kExactStepMaxSize) return cholesky_lower(A, L);
+  L = A;
+  return cholesky_in_place(L);
 }
+
+bool StepLength::positive_definite() { return factor_lower(trial_, trial_factor_); }
 
 void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor) {
   next.swap(trial_);

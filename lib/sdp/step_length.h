@@ -40,6 +40,11 @@ constexpr int kInverseLanczosMaxSize = 96;
 constexpr Eigen::Index kColumnCholeskyMinSize = 24;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
+// The same by the kernel for A's size: cholesky_lower up to kExactStepMaxSize rows, Eigen's
+// (cholesky_in_place on a copy into L) above. The interior points' and dual scaling's factors
+// of X, Z and their step tests.
+bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
+
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
 // triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
 // recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex); below, real
@@ -77,6 +82,16 @@ void symmetrize(Eigen::MatrixXd& A);
 // out must already be n × n and must not alias P.
 void times_block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& D, int d, Eigen::MatrixXd& out);
 
+// The first of α, 0.7α, 0.7²α, … (30 tries) for which passes(α) holds (a Cholesky test of the
+// trial point it forms), or 0 when none does: the step lengths' confirmation after a Lanczos
+// estimate of the boundary, in StepLength, the complex interior point and dual scaling.
+template <class Passes>
+double shrink_until_passes(double alpha, Passes passes) {
+  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7)
+    if (passes(alpha)) return alpha;
+  return 0.0;
+}
+
 class StepLength {
  public:
   explicit StepLength(int n);
@@ -106,11 +121,10 @@ class StepLength {
   // factorisation (at most 30 tries, then 0).
   template <class FormTrial>
   double shrink_until_positive(double alpha, FormTrial form_trial) {
-    for (int tries = 0; tries < 30; ++tries, alpha *= 0.7) {
-      form_trial(alpha);
-      if (positive_definite()) return alpha;
-    }
-    return 0.0;
+    return shrink_until_passes(alpha, [&](double a) {
+      form_trial(a);
+      return positive_definite();
+    });
   }
   bool positive_definite();  // Cholesky test of trial_
 
@@ -121,15 +135,5 @@ class StepLength {
                                   // blocked kernel above kExactStepMaxSize), n × n
   Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
 };
-
-// The first of α, 0.7α, 0.7²α, … (30 tries) for which passes(α) holds (a Cholesky test of the
-// trial point it forms), or 0 when none does: the step lengths' confirmation after a Lanczos
-// estimate of the boundary, in the complex interior point and in dual scaling.
-template <class Passes>
-double shrink_until_passes(double alpha, Passes passes) {
-  for (int tries = 0; tries < 30; ++tries, alpha *= 0.7)
-    if (passes(alpha)) return alpha;
-  return 0.0;
-}
 
 }  // namespace fact::sdp::detail
