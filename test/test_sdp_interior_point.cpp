@@ -47,15 +47,18 @@ double complex_objective(const Eigen::MatrixXcd& H, const ComplexInteriorPointOu
 
 // The primal–dual method resumed from `handed` (a handed-off, strictly feasible pair) converges,
 // counts the handed-off iterations, and ends at the optimum of `whole`, an uninterrupted run:
-// objective and Σ y within 1e-9 relative. Returns the resumed outcome.
+// objective and Σ y within 1e-9 relative, to at least 0.5e-4 as the runs' own stopping gap
+// (complex_relative_gap's floor): each run stops within that gap of the optimum, and the N = 80
+// problem's optimum is 2.7e-5. Returns the resumed outcome.
 ComplexInteriorPointOutcome expect_resumes_to(const Eigen::MatrixXcd& H, const ComplexInteriorPointOutcome& handed,
                                               const ComplexInteriorPointOutcome& whole) {
   const ComplexInteriorPointOutcome rest = fact::sdp::detail::solve_complex_interior_point(H, Options{}, 0.0, &handed);
   EXPECT_TRUE(rest.converged) << rest.reason;
   EXPECT_GT(rest.iterations, handed.iterations);
   const double optimum = complex_objective(H, whole);
-  EXPECT_NEAR(complex_objective(H, rest), optimum, 1e-9 * std::abs(optimum));
-  EXPECT_NEAR(rest.y.sum(), whole.y.sum(), 1e-9 * std::abs(optimum));
+  const double tolerance = 1e-9 * std::max(0.5e-4, std::abs(optimum));
+  EXPECT_NEAR(complex_objective(H, rest), optimum, tolerance);
+  EXPECT_NEAR(rest.y.sum(), whole.y.sum(), tolerance);
   return rest;
 }
 
@@ -746,14 +749,14 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
   }
 }
 
-// cholesky_in_place on both of its paths (Eigen's unblocked kernel below 128 rows, its blocked one
-// from 128; complex: from 256), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
+// cholesky_in_place on every path (Eigen's unblocked kernel below 128 rows, its blocked one
+// from 128; complex: complex_cholesky_by_loops below 64, Eigen's blocked kernel from 256), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
 // negative first pivot) and for a NaN or infinite entry on the diagonal or below it.
 template <class Matrix>
 void expect_cholesky_on_every_path(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n : {1, 2, 5, 31, 32, 100, 127, 128, 140, 255, 256}) {
+  for (int n : {1, 2, 5, 31, 32, 63, 64, 100, 127, 128, 140, 255, 256}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
     const Matrix A = B * B.adjoint() + Matrix::Identity(n, n);

@@ -157,6 +157,20 @@ struct SchurWorkspace {
   VectorXd mu, r, nu;        // multipliers, Schur right-hand side, row multipliers of the step (N)
 };
 
+// X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by explicit sums over the lower triangle:
+// Eigen's lazy complex product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md,
+// session 39).
+void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
+  const Eigen::Index N = Y.rows(), p = Y.cols();
+  for (Eigen::Index j = 0; j < N; ++j)
+    for (Eigen::Index i = j; i < N; ++i) {
+      std::complex<double> sum = 0;
+      for (Eigen::Index k = 0; k < p; ++k) sum += Y(i, k) * std::conj(Y(j, k));
+      X(i, j) = sum;
+      X(j, i) = std::conj(sum);
+    }
+}
+
 // One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
 // N·t × N·t Hessian. The damped system (Hess + 2λ) V = −grad is
 //     (S + λI) V + diag(ν) Y = −S Y,   Re⟨y_i, v_i⟩ = 0 for every row i,
@@ -223,7 +237,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
     const double grad_norm = 2.0 * (ws.HY - ws.mu.asDiagonal() * Y).norm();  // ‖2 S Y‖
     if (grad_norm < grad_tol) break;
     certificate_matrix(H, ws.mu, ws.S);
-    ws.X.noalias() = Y * Y.adjoint();
+    factor_gram(Y, ws.X);
     double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
     bool accepted = false;
     for (int tries = 0; tries < 14 && !accepted; ++tries, lambda *= 10) {

@@ -151,9 +151,21 @@ double damped_newton_step(Eigen::MatrixXd& H, SpdSolver& llt, const Eigen::Vecto
 constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
 constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
 
+// Below this size a complex cholesky_in_place runs complex_cholesky_by_loops instead of Eigen's
+// unblocked kernel: tight_noisy N = 5 / 6 / 12 / 32 took 0.97 / 0.96 / 0.97 / 0.97 of the time,
+// N = 64 … 200 the same (64 and 128 measured alike at N = 32; 256 lost 9 % at N = 200). The same
+// loop on real matrices gained nothing (BENCHMARKS.md, session 39).
+constexpr Eigen::Index kLoopComplexCholeskyMaxSize = 64;
+
+// A = L Lᴴ for a Hermitian A (n × n), in place into A's lower triangle (its upper one untouched),
+// right-looking: column k scaled by its pivot's root, then taken off the trailing columns. False
+// at the first pivot that is not positive (a NaN one too).
+bool complex_cholesky_by_loops(Eigen::MatrixXcd& A);
+
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
 // triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize (complex:
-// kBlockedComplexCholeskyMinSize) and its blocked one from it;
+// complex_cholesky_by_loops below kLoopComplexCholeskyMaxSize, then Eigen's unblocked kernel
+// below kBlockedComplexCholeskyMinSize) and its blocked one from it;
 // false when A is not positive definite or its lower triangle has a NaN or infinite entry (of a
 // complex diagonal only the real part is read, as for any self-adjoint A).
 // Eigen::LLT::compute would also sum |a_ij| for a condition estimate that nothing here reads: for
@@ -162,12 +174,14 @@ constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
 template <class Matrix>
 bool cholesky_in_place(Matrix& A) {
   using Kernel = Eigen::internal::llt_inplace<typename Matrix::Scalar, Eigen::Lower>;
-  const Eigen::Index blocked_from = Eigen::NumTraits<typename Matrix::Scalar>::IsComplex
-                                        ? kBlockedComplexCholeskyMinSize
-                                        : kBlockedCholeskyMinSize;
+  constexpr bool is_complex = Eigen::NumTraits<typename Matrix::Scalar>::IsComplex;
+  const Eigen::Index blocked_from = is_complex ? kBlockedComplexCholeskyMinSize : kBlockedCholeskyMinSize;
   // Eigen tests its pivots by x <= 0, which a NaN passes, and an infinite pivot has an infinite
   // root: a NaN or infinite entry read from the lower triangle ends up on L's diagonal (or, off
   // the diagonal and infinite, makes a later pivot −∞), checked here.
+  if constexpr (is_complex) {
+    if (A.rows() < kLoopComplexCholeskyMaxSize) return complex_cholesky_by_loops(A) && A.diagonal().real().allFinite();
+  }
   return (A.rows() < blocked_from ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
          A.diagonal().real().allFinite();
 }
