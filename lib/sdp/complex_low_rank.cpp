@@ -142,10 +142,12 @@ int rank_one_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iter
 // Every matrix of one Schur-form Newton run, allocated once (N × N complex unless noted).
 struct SchurWorkspace {
   SchurWorkspace(Eigen::Index N, Eigen::Index p)
-      : HY(N, p), WY(N, p), next(N, p), next_HY(N, p), longer(N, p), longer_HY(N, p), S(N, N), L(N, N), L_inv(N, N),
+      : HY(N, p), WY(N, p), scaled(N, p), next(N, p), next_HY(N, p), longer(N, p), longer_HY(N, p), S(N, N), L(N, N),
+        L_inv(N, N),
         W(N, N), X(N, N), M(N, N), llt(N), mu(N), r(N), nu(N) {}
   MatrixXcd HY;              // H Y, N × p
   MatrixXcd WY;              // W Y, N × p
+  MatrixXcd scaled;          // diag(λ − ν) Y, N × p
   MatrixXcd next, next_HY;   // trial factor and H · it, N × p
   MatrixXcd longer, longer_HY;  // a longer trial along the same step and H · it, N × p
   MatrixXcd S;               // H − diag(μ)
@@ -171,6 +173,22 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
     }
 }
 
+// C = A B for A N × N and B N × p, p small (the factor's rank), column by column as sums of A's
+// columns: Eigen's complex product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
+// session 39). C must not alias A or B.
+void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) {
+  const Eigen::Index n = A.rows();
+  C.setZero();
+  for (Eigen::Index k = 0; k < B.cols(); ++k) {
+    std::complex<double>* __restrict c = &C(0, k);
+    for (Eigen::Index j = 0; j < A.cols(); ++j) {
+      const std::complex<double> b = B(j, k);
+      const std::complex<double>* __restrict a = &A(0, j);
+      for (Eigen::Index i = 0; i < n; ++i) c[i] += a[i] * b;
+    }
+  }
+}
+
 // One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
 // N·t × N·t Hessian. The damped system (Hess + 2λ) V = −grad is
 //     (S + λI) V + diag(ν) Y = −S Y,   Re⟨y_i, v_i⟩ = 0 for every row i,
@@ -191,11 +209,12 @@ Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) 
   gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᴴ L⁻¹
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
   if (!ws.llt.factor(ws.M)) return Trial::schur_not_definite;
-  ws.WY.noalias() = ws.W * Y;
+  times_thin(ws.W, Y, ws.WY);
   ws.r = VectorXd::Ones(N) - lambda * (Y.array().conjugate() * ws.WY.array()).real().rowwise().sum().matrix();
   ws.llt.solve(ws.r, ws.nu);                // −ν = M⁻¹ r
   ws.nu = lambda + ws.nu.array();            // λ − ν
-  ws.next.noalias() = ws.W * (ws.nu.asDiagonal() * Y);
+  ws.scaled.noalias() = ws.nu.asDiagonal() * Y;
+  times_thin(ws.W, ws.scaled, ws.next);
   ws.next.rowwise().normalize();
   return Trial::formed;
 }
@@ -208,7 +227,7 @@ double extend_schur_step(const MatrixXcd& H, const MatrixXcd& Y, double f, doubl
   for (double factor = 2.0; factor <= 4.0; factor *= 2.0) {
     ws.longer = Y + factor * (ws.next - Y);
     ws.longer.rowwise().normalize();
-    ws.longer_HY.noalias() = H * ws.longer;
+    times_thin(H, ws.longer, ws.longer_HY);
     const double f_longer = cost_of(ws.longer, ws.longer_HY);
     if (!(f_longer < f_next)) break;
     f_next = f_longer;
@@ -245,7 +264,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
       if (trial == Trial::shift_too_small) failed_shift = lambda;
       if (trial != Trial::formed) continue;
       if (saddle_exit && grad_norm < failed_shift) return it;
-      ws.next_HY.noalias() = H * ws.next;
+      times_thin(H, ws.next, ws.next_HY);
       const double f_next = cost_of(ws.next, ws.next_HY);
       if (!(f_next <= f + noise)) continue;
       f = extend_schur_step(H, Y, f, f_next, ws);
