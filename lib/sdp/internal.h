@@ -273,26 +273,40 @@ GershgorinBounds gershgorin_bounds(const Eigen::Ref<const Eigen::VectorXd>& a, c
 // 1.48 / 5.1 µs at k = 8 / 12 / 24, this 0.28 / 0.38 / 0.99 µs.
 double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b);
 
+// The Lanczos start: near the all-ones vector, perturbed so that no symmetry of B hides its
+// lowest eigenvector, unit length (n). Computed once per size and thread (n sines cost about as
+// much as a 4-step Lanczos run's products at n = 10).
+inline const Eigen::VectorXd& lanczos_start(Eigen::Index n) {
+  static thread_local Eigen::VectorXd start;
+  if (start.size() != n) {
+    start.resize(n);
+    const double flat = 1.0 / std::sqrt(static_cast<double>(n));
+    for (Eigen::Index i = 0; i < n; ++i) start[i] = flat + 1e-3 * std::sin(1.0 + 7.0 * i);
+    start.normalize();
+  }
+  return start;
+}
+
 // The lowest Ritz value of a self-adjoint operator (n × n, real or complex: Vector is VectorXd or
-// VectorXcd) after at most `steps` Lanczos steps with full reorthogonalisation, from a fixed start
-// near the all-ones vector; apply(v, w) writes w = B v. Ritz values lie inside the spectrum, so the
-// estimate is ≥ λ_min(B): the step lengths that use it confirm the step with a Cholesky test.
+// VectorXcd) after at most `steps` Lanczos steps with full reorthogonalisation (twice, against one
+// basis vector at a time: the block form's temporaries were most of a 4-step run's 2 µs at
+// n = 10; BENCHMARKS.md, session 39), from lanczos_start; apply(v, w) writes w = B v. Ritz values
+// lie inside the spectrum, so the estimate is ≥ λ_min(B): the step lengths that use it confirm the
+// step with a Cholesky test.
 template <class Vector, class Apply>
 double lanczos_lowest(Eigen::Index n, int steps, Apply apply) {
   using Basis = Eigen::Matrix<typename Vector::Scalar, Eigen::Dynamic, Eigen::Dynamic>;
   const int k = static_cast<int>(std::min<Eigen::Index>(steps, n));
   Basis V(n, k);  // Lanczos basis, n × k
   Eigen::VectorXd alpha(k), beta(k);
-  Vector v(n), w(n);
-  const double flat = 1.0 / std::sqrt(static_cast<double>(n));
-  for (Eigen::Index i = 0; i < n; ++i) v[i] = flat + 1e-3 * std::sin(1.0 + 7.0 * i);  // avoid symmetric starts
-  v.normalize();
+  Vector v = lanczos_start(n).template cast<typename Vector::Scalar>(), w(n);
   int done = 0;
   for (int j = 0; j < k; ++j) {
     V.col(j) = v;
     apply(v, w);
     alpha[j] = std::real(v.dot(w));
-    for (int pass = 0; pass < 2; ++pass) w -= V.leftCols(j + 1) * (V.leftCols(j + 1).adjoint() * w);
+    for (int pass = 0; pass < 2; ++pass)
+      for (int q = 0; q <= j; ++q) w -= V.col(q).dot(w) * V.col(q);
     beta[j] = w.norm();
     done = j + 1;
     if (beta[j] < 1e-12) break;

@@ -21,8 +21,11 @@ constexpr int kExactStepMaxSize = 48;
 // O(n²) a step (4 steps up to n = 64, 8 above; step_length.cpp). With 8 steps, when introduced:
 // the same iterations (or one fewer) on the benchmark's plain and random instances, and 3 / 10 /
 // 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128 (plain_noisy; below n = 24 the
-// exact path's plain loops cost less than Eigen's triangular solves).
-constexpr int kPredictorLanczosMinSize = 24;
+// exact path's plain loops cost less than Eigen's triangular solves then). From 16 since session
+// 39, when Lanczos lost its temporaries (lanczos_lowest): 4 seeds of the plain cost (noise 0.01,
+// 0.05, 0.1) and random C (rank 3, N + 1, full), summed by kind, N = 8 / 10 (n = 16 / 20) 0.90–1.08
+// / 0.81–1.07 of the time, 0.96 / 0.94 on average; at N = 5 … 7 (n = 10 … 14) 0.89–1.11, about even.
+constexpr int kPredictorLanczosMinSize = 16;
 // Up to this n the Lanczos estimates multiply by an explicit L⁻¹ (two matrix–vector products a
 // step) instead of solving with L: at n = 64 a pair of Eigen's triangular solves takes 1.2 µs,
 // the two products 0.24 µs; at n = 128 2.5 against 2.0 µs, at n = 200 4.2 against 4.9 µs. Above
