@@ -749,8 +749,9 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
   }
 }
 
-// cholesky_in_place on every path (Eigen's unblocked kernel below 128 rows, its blocked one
-// from 128; complex: complex_cholesky_by_loops below 64, Eigen's blocked kernel from 256), real and complex: L Lᴴ = A for a positive definite A, the upper triangle left as it
+// cholesky_in_place on every path (real: Eigen's unblocked kernel below 128 rows, its blocked one
+// from 128; complex: complex_cholesky_by_loops below 64 rows, Eigen's unblocked kernel below 256,
+// its blocked one from 256): L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
 // negative first pivot) and for a NaN or infinite entry on the diagonal or below it.
 template <class Matrix>

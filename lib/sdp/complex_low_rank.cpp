@@ -164,6 +164,7 @@ struct SchurWorkspace {
 // session 39).
 void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
   const Eigen::Index N = Y.rows(), p = Y.cols();
+  X.resize(N, N);
   for (Eigen::Index j = 0; j < N; ++j)
     for (Eigen::Index i = j; i < N; ++i) {
       std::complex<double> sum = 0;
@@ -175,10 +176,10 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
 
 // C = A B for A N × N and B N × p, p small (the factor's rank), column by column as sums of A's
 // columns: Eigen's complex product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
-// session 39). C must not alias A or B.
+// session 39). C (resized to N × p) must not alias A or B.
 void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) {
   const Eigen::Index n = A.rows();
-  C.setZero();
+  C.setZero(n, B.cols());
   for (Eigen::Index k = 0; k < B.cols(); ++k) {
     std::complex<double>* __restrict c = &C(0, k);
     for (Eigen::Index j = 0; j < A.cols(); ++j) {
