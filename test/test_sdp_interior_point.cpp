@@ -753,7 +753,8 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
 // from 128; complex: complex_cholesky_by_loops below 64 rows, Eigen's unblocked kernel below 256,
 // its blocked one from 256): L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
-// negative first pivot) and for a NaN or infinite entry on the diagonal or below it.
+// negative first pivot), for a singular one (a last pivot of exactly 0) and for a NaN or infinite
+// entry on the diagonal or below it.
 template <class Matrix>
 void expect_cholesky_on_every_path(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -776,6 +777,10 @@ void expect_cholesky_on_every_path(std::mt19937& rng) {
     Matrix negative_first = A;
     negative_first(0, 0) = -1.0;
     EXPECT_FALSE(fact::sdp::detail::cholesky_in_place(negative_first));
+    Matrix zero_last = A;  // singular: the last pivot is exactly 0 (a pivot test of < 0 would pass it)
+    zero_last.row(n - 1).setZero();
+    zero_last.col(n - 1).setZero();
+    EXPECT_FALSE(fact::sdp::detail::cholesky_in_place(zero_last));
     for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()})
       for (const auto& [i, j] : {std::pair<int, int>{n - 1, n - 1}, {0, 0}, {n - 1, 0}}) {
         Matrix with_bad = A;

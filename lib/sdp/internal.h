@@ -274,8 +274,9 @@ GershgorinBounds gershgorin_bounds(const Eigen::Ref<const Eigen::VectorXd>& a, c
 double lowest_tridiagonal_eigenvalue(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b);
 
 // The Lanczos start: near the all-ones vector, perturbed so that no symmetry of B hides its
-// lowest eigenvector, unit length (n). Computed once per size and thread (n sines cost about as
-// much as a 4-step Lanczos run's products at n = 10).
+// lowest eigenvector, unit length (n). Kept per thread for the last n asked and recomputed when n
+// changes (n sines cost about as much as a 4-step Lanczos run's products at n = 10); the reference
+// holds until the thread's next call with another n, so callers copy it at once.
 inline const Eigen::VectorXd& lanczos_start(Eigen::Index n) {
   static thread_local Eigen::VectorXd start;
   if (start.size() != n) {
