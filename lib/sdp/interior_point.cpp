@@ -118,7 +118,6 @@ struct Workspace {
                                                // factor the next X and Z (take_tested)
 };
 
-
 // The HKM primal direction ΔX = sym(σμW − X − P W) for the P already in ws.P (n × n). With
 // `accurate`, P W is formed as (P Lz⁻ᵀ) Lz⁻¹ (one more n × n product): near the optimum W's
 // entries grow as 1/μ and P W cancels to O(1), and the product with W loses the digits the last
