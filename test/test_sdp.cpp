@@ -639,6 +639,34 @@ TEST(SdpStaircase, SmallRealProblemsClimbPastRankTwo) {
   }
 }
 
+// At n = 10 and 12 automatic mode climbs past rank 2 only from a steep saddle (λ_min(S) below
+// −kSteepClimbEig at the rank-2 critical point): full-rank random C (fact-bench-sdp's
+// random_fullrank N = 5 and 6) has optima of rank 3 and 4 that the staircase certifies at the
+// interior point's objective; the plain form at N = 5 and 6, whose rank-2 saddle is shallow
+// (λ_min(S) ≈ −3e-3), goes to the interior point.
+TEST(SdpStaircase, TenAndTwelveRowsClimbOnlyFromASteepSaddle) {
+  struct Case {
+    std::string label;
+    Eigen::MatrixXd C;
+    Method expected;
+  };
+  for (const Case& c : {Case{"full rank N = 5", random_psd(10, 4005), Method::low_rank},
+                        Case{"full rank N = 6", random_psd(12, 4006), Method::low_rank},
+                        Case{"plain N = 5", bench_plain_noisy_cost(5), Method::interior_point},
+                        Case{"plain N = 6", bench_plain_noisy_cost(6), Method::interior_point}}) {
+    SCOPED_TRACE(c.label);
+    const Result r = fact::sdp::solve(c.C, 2);
+    expect_certificate(c.C, 2, r);
+    EXPECT_EQ(r.method_used, c.expected) << r.reason;
+    EXPECT_GT(r.rank, 2);
+    Options ip;
+    ip.method = Method::interior_point;
+    const Result interior = fact::sdp::solve(c.C, 2, ip);
+    ASSERT_TRUE(interior.certified()) << interior.reason;
+    EXPECT_NEAR(r.objective, interior.objective, 1e-8 * std::max(1.0, std::abs(interior.objective)));
+  }
+}
+
 // Planted zero optima for both block sizes, by the explicit method and in automatic mode: d = 2
 // on N = 4 and 6 blocks with null spaces of dimension 5 and 9 (a rank-2 factor in them would need
 // 2k − 1 ≥ 3N, so rank-2 Newton cannot end there), d = 1 on N = 10 with a null space of dimension 8.

@@ -350,9 +350,12 @@ struct LowRankOutcome {
 // (low_rank.cpp, provably_indefinite: a run stopped far from a critical point, by the crawl watch
 // or by its step cap) skips S's spectrum: its
 // certificate has Λ and tr Λ, no eigenvalues, and NaN for λ_min and the bound, for a caller that
-// goes on to another method.
+// goes on to another method. With climb_eig > 0 the staircase climbs past rank d only from a
+// critical point with steep negative curvature: ‖S Y‖_F < climb_eig (S Y is half the gradient)
+// and λ_min(S) < −climb_eig (a Cholesky test of S + climb_eig·I fails); otherwise rank d is its
+// last level.
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease = 0,
-                              bool spectrum_only_if_certifiable = false);
+                              bool spectrum_only_if_certifiable = false, double climb_eig = 0);
 
 // Mehrotra's centring σ = min(1, (μ_aff/μ)^exponent) from the predictor's complementarity μ_aff
 // (after the affine step) and the current μ, for both interior points; 0 when the ratio is not

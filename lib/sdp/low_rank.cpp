@@ -133,6 +133,14 @@ bool provably_indefinite(const Eigen::MatrixXd& S, const Eigen::MatrixXd& Y, dou
   return (S * Y).norm() > 2.0 * limit;
 }
 
+// True when the symmetric S (n × n) has an eigenvalue below −t (t > 0): S + t·I fails a Cholesky
+// test (up to rounding at the boundary). O(n³/3), a fraction of S's spectrum.
+bool has_eigenvalue_below(const Eigen::MatrixXd& S, double t) {
+  Eigen::MatrixXd shifted = S;  // S + t·I, factored in place (n × n)
+  shifted.diagonal().array() += t;
+  return !cholesky_in_place(shifted);
+}
+
 // The certificate of a factor that cannot certify (provably_indefinite): Λ and tr Λ, no
 // spectrum, and NaN for λ_min, the bound and its error.
 Certificate without_spectrum(const Eigen::MatrixXd& lambda, int d) {
@@ -146,7 +154,7 @@ Certificate without_spectrum(const Eigen::MatrixXd& lambda, int d) {
 }  // namespace
 
 LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& options, double crawl_decrease,
-                              bool spectrum_only_if_certifiable) {
+                              bool spectrum_only_if_certifiable, double climb_eig) {
   const Eigen::Index n = C.rows();
   const int blocks = static_cast<int>(n / d);
   const int max_rank = options.max_rank > 0 ? options.max_rank : std::min<int>(pataki_rank(blocks, d), n);
@@ -157,14 +165,22 @@ LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& op
     out.iterations +=
         newton_refine(C, d, out.Y, options.max_newton_iterations, 1e-12, NewtonSystem::automatic, crawl_decrease);
     const Eigen::MatrixXd lambda = lambda_from_factor(C, out.Y, d);
-    if (spectrum_only_if_certifiable && out.Y.cols() >= max_rank &&
-        provably_indefinite(certificate_matrix(C, lambda, d), out.Y, options.psd_tol)) {
-      out.certificate = without_spectrum(lambda, d);
-      return out;
+    Eigen::MatrixXd S;  // C − Λ (n × n), formed only for the two tests below
+    bool last_level = out.Y.cols() >= max_rank;
+    if (climb_eig > 0 && out.Y.cols() == d && !last_level) {
+      S = certificate_matrix(C, lambda, d);
+      last_level = !((S * out.Y).norm() < climb_eig && has_eigenvalue_below(S, climb_eig));
+    }
+    if (spectrum_only_if_certifiable && last_level) {
+      if (S.size() == 0) S = certificate_matrix(C, lambda, d);
+      if (provably_indefinite(S, out.Y, options.psd_tol)) {
+        out.certificate = without_spectrum(lambda, d);
+        return out;
+      }
     }
     out.certificate = certify(C, lambda, d, false);
     out.certified = out.certificate.min_eig >= -options.psd_tol;
-    if (out.certified || out.Y.cols() >= max_rank) return out;
+    if (out.certified || last_level) return out;
     out.certificate = certify(C, lambda, d, true);  // the escape direction needs the eigenvector
     out.Y = escape_saddle(out.Y, out.certificate.min_vector, d, 0.1);
   }

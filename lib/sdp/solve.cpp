@@ -92,6 +92,19 @@ constexpr double kInteriorStartMix = 0.65;
 // long (its optimum, of rank 4, needs 45 staircase steps), at N = 6 3.1× (BENCHMARKS.md, session 23).
 // All 300 instances (N = 2 … 6) were certified on both paths, with the same statuses.
 constexpr Eigen::Index kStaircaseMaxRows = 8;
+// Above kStaircaseMaxRows and up to kSteepClimbMaxRows rows (N = 5, 6; d = 2) automatic mode climbs
+// past rank 2 only from a critical point (‖S Y‖_F < kSteepClimbEig) whose S has
+// λ_min < −kSteepClimbEig (C scaled to ‖C‖_F = 1; a Cholesky test of S + kSteepClimbEig·I), and
+// goes to the interior point otherwise.
+// The staircase measured 0.40–0.87 of the time where λ_min was that low (random C of full rank and
+// of rank N + 1: λ_min −0.04 … −0.13 at rank 2, optima of rank 3 and 4) but 1.3–3× where it was
+// −5e-4 … −1e-2 (the plain form, N + 1 rounds; optima of rank 4 reached by crawling levels).
+// Sweep (4 seeds each of the plain form at noise 0.01 / 0.05 / 0.1 and with 2N and 3N rounds,
+// random C of rank 3, N + 1 and full; fastest of 3, interleaved): random full rank 0.59 of the time,
+// rank N + 1 0.81 (one instance 1.31×), the other kinds 0.99–1.02, no status changes. At N = 7
+// random C of rank N + 1 lost (1.2–2.1×), so the limit is 12 rows (BENCHMARKS.md, session 40).
+constexpr Eigen::Index kSteepClimbMaxRows = 12;
+constexpr double kSteepClimbEig = 1e-2;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -189,19 +202,23 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // converged within 10 steps on every benchmark instance) for at most 25 steps; a problem
 // that does not certify there goes to the interior point, which measures faster than
 // climbing the staircase on high-rank optima. Up to kStaircaseMaxRows rows (d = 2) it climbs
-// the whole staircase instead, 25 Newton steps a level. Above kWarmStartMaxRows rows, where the
+// the whole staircase instead, 25 Newton steps a level, and up to kSteepClimbMaxRows when rank 2
+// ends with λ_min(S) < −kSteepClimbEig. Above kWarmStartMaxRows rows, where the
 // interior point starts cold and the attempt serves only if it certifies, it stops once it crawls
 // (detail::CrawlWatch, f down by less than kRankDCrawlDecrease of itself in 3 steps).
 Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
-  double crawl_decrease = 0;
+  double crawl_decrease = 0, climb_eig = 0;
   if (o.method == Method::automatic) {
-    if (!(d == 2 && C.rows() <= kStaircaseMaxRows)) o.max_rank = d;
+    const bool whole_staircase = d == 2 && C.rows() <= kStaircaseMaxRows;
+    if (!whole_staircase && d == 2 && C.rows() <= kSteepClimbMaxRows) climb_eig = kSteepClimbEig;
+    if (!whole_staircase && climb_eig == 0) o.max_rank = d;
     o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
     if (C.rows() > kWarmStartMaxRows) crawl_decrease = kRankDCrawlDecrease;
   }
   // (automatic mode goes on to the interior point when the attempt does not certify, and a
   // certificate without a spectrum never replaces its result)
-  detail::LowRankOutcome lr = detail::solve_low_rank(C, d, o, crawl_decrease, o.method == Method::automatic);
+  detail::LowRankOutcome lr =
+      detail::solve_low_rank(C, d, o, crawl_decrease, o.method == Method::automatic, climb_eig);
   Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
   return with_one_more_step(C, d, std::move(c), o);
@@ -231,7 +248,7 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
 }
 
 // Automatic mode on a real C: rank-d Newton (from_low_rank; the whole staircase for d = 2 and
-// n ≤ kStaircaseMaxRows) and the zero optimum (from_null_space), the first that certifies, else
+// n ≤ kStaircaseMaxRows, or n ≤ kSteepClimbMaxRows after a steep rank 2) and the zero optimum (from_null_space), the first that certifies, else
 // the low-rank candidate (the interior point's warm start) with both runs' steps. The null space
 // goes first when it may hold a feasible X but generically none of rank d: then a zero optimum, if
 // there is one, is out of rank-d Newton's reach (the plain form from N = 7 on, k = N − 1:
