@@ -244,12 +244,14 @@ double extend_schur_step(const MatrixXcd& H, const MatrixXcd& Y, double f, doubl
 // at that shift) while ‖grad‖ < λ: the negative curvature then dominates, the point is near a
 // saddle of the SDP at this rank, and converging to it only costs steps (the staircase escapes
 // instead; tight_noisy N = 12: 25 of 39 steps were spent there).
-int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit) {
+int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit,
+                         double curvature) {
   const Eigen::Index N = H.rows();
   SchurWorkspace ws(N, Y.cols());
   ws.HY.noalias() = H * Y;
   double f = cost_of(Y, ws.HY);
-  double lambda = 1e-8;
+  double lambda = 1e-8;  // the first shift tried: the decade at or below |curvature|/10
+  while (lambda * 10 <= 0.1 * std::abs(curvature)) lambda *= 10;
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
@@ -281,9 +283,10 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
 
 }  // namespace
 
-int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit) {
+int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit,
+                   double curvature) {
   if (Y.cols() == 1) return rank_one_newton(H, Y, max_iterations, grad_tol);
-  return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit);
+  return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit, curvature);
 }
 
 namespace {
@@ -298,17 +301,34 @@ Eigen::MatrixXcd spectral_start(const MatrixXcd& H) {
 }
 
 // [Y, α√N V] with rows normalised (V: unit eigenvectors, N × k), for the α in 1, ½, … 2⁻⁹
-// of least cost.
+// of least cost. Row i of the candidate is s_i [y_i, α√N v_i] with s_i = 1/√(|y_i|² + α²N|v_i|²),
+// so its cost is sᵀ (A + α²N B) s with A = Re(H ∘ conj(Y Yᴴ)) and B = Re(H ∘ conj(V Vᴴ)) (N × N
+// real, formed once): O(N²) a candidate instead of a product with H and a new factor each (6 % of
+// tight_noisy N = 5; BENCHMARKS.md, session 40).
 Eigen::MatrixXcd escape(const MatrixXcd& H, const MatrixXcd& Y, const MatrixXcd& v) {
-  MatrixXcd next(Y.rows(), Y.cols() + v.cols()), best;
-  double best_f = (H * Y).cwiseProduct(Y.conjugate()).real().sum();
+  const Eigen::Index N = Y.rows();
+  const double n = static_cast<double>(N);
+  MatrixXcd gram;  // Y Yᴴ, then V Vᴴ (N × N)
+  factor_gram(Y, gram);
+  const MatrixXd A = (H.array() * gram.array().conjugate()).real();  // N × N
+  factor_gram(v, gram);
+  const MatrixXd B = (H.array() * gram.array().conjugate()).real();  // N × N
+  const VectorXd y_norms = Y.rowwise().squaredNorm(), v_norms = v.rowwise().squaredNorm();  // N
+  double best_alpha = 1.0, best_f = std::numeric_limits<double>::infinity();
+  VectorXd scale(N);  // s_i
   for (double alpha = 1.0; alpha > 1e-3; alpha *= 0.5) {
-    next << Y, alpha * v * std::sqrt(double(Y.rows()));
-    next.rowwise().normalize();
-    const double f = (H * next).cwiseProduct(next.conjugate()).real().sum();
-    if (f < best_f || best.size() == 0) { best_f = f; best = next; }
+    const double weight = alpha * alpha * n;
+    scale = (y_norms + weight * v_norms).cwiseSqrt().cwiseInverse();
+    const double f = scale.dot(A * scale) + weight * scale.dot(B * scale);
+    if (f < best_f) {
+      best_f = f;
+      best_alpha = alpha;
+    }
   }
-  return best;
+  MatrixXcd next(N, Y.cols() + v.cols());
+  next << Y, best_alpha * std::sqrt(n) * v;
+  next.rowwise().normalize();
+  return next;
 }
 
 }  // namespace
@@ -348,8 +368,9 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
   const Eigen::Index N = H.rows();
   MatrixXcd Y = spectral_start(H);
   int iterations = 0;
+  double curvature = 0;  // λ_min(S) at the level below, whose eigenvector the escape followed
   for (;;) {
-    iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true);
+    iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true, curvature);
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
     VectorXd mu;  // the multipliers at Y, N
@@ -376,6 +397,7 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());
     while (columns > 1 && complex_newton_unknowns(N, p + columns) > max_unknowns) --columns;
     Y = escape(H, out.Y, out.eigenvectors.leftCols(columns));
+    curvature = out.eigenvalues[0];
   }
 }
 

@@ -548,9 +548,12 @@ bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd&
 // ‖grad‖ < grad_tol. Returns the steps taken. At p = 1 the Hessian is formed in tangent bases
 // (N × N real); at p ≥ 2 each step solves the Newton system in Schur form through (S + λI)⁻¹
 // and an N × N real system, O(N³) whatever p is. With saddle_exit (p ≥ 2) it returns early
-// when S's negative curvature dominates the gradient (complex_low_rank.cpp).
+// when S's negative curvature dominates the gradient (complex_low_rank.cpp). curvature (p ≥ 2):
+// a known λ_min(S) near Y, such as the level below's after a staircase escape; the damping's
+// first shift is then the decade at or below |curvature|/10 instead of 1e-8 (S + λI must be
+// positive definite, and the shifts below |λ_min(S)| only fail their Cholesky tests).
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
-                   bool saddle_exit = false);
+                   bool saddle_exit = false, double curvature = 0);
 
 struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
