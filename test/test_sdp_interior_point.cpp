@@ -893,6 +893,33 @@ void expect_triangular_products_match(std::mt19937& rng) {
         }
 }
 
+// The complex staircase's loops against Eigen's products: factor_gram's X = Y Yᴴ, both triangles
+// (the escape reads the upper one), and times_thin's A B, for ranks 1 … 3 and N = 1, 5, 33,
+// into outputs of the wrong size and with stale entries.
+TEST(SdpKernels, FactorGramAndTimesThinMatchEigensProducts) {
+  using Eigen::MatrixXcd;
+  std::mt19937 rng(37);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (const Eigen::Index N : {1, 5, 33})
+    for (const Eigen::Index p : {1, 2, 3}) {
+      SCOPED_TRACE(testing::Message() << "N = " << N << ", p = " << p);
+      const MatrixXcd Y = fact::test::gaussian_matrix<MatrixXcd>(N, p, rng, gauss);
+      const MatrixXcd A = fact::test::gaussian_matrix<MatrixXcd>(N, N, rng, gauss);
+      MatrixXcd X = MatrixXcd::Constant(N + 1, N, {7.0, -7.0});  // wrong size, stale entries
+      fact::sdp::detail::factor_gram(Y, X);
+      ASSERT_EQ(X.rows(), N);
+      ASSERT_EQ(X.cols(), N);
+      const MatrixXcd expected_gram = Y * Y.adjoint();
+      EXPECT_LT((X - expected_gram).cwiseAbs().maxCoeff(), 1e-14 * Y.squaredNorm());
+      MatrixXcd C = MatrixXcd::Constant(N, p + 2, {3.0, 1.0});  // wrong size, stale entries
+      fact::sdp::detail::times_thin(A, Y, C);
+      ASSERT_EQ(C.rows(), N);
+      ASSERT_EQ(C.cols(), p);
+      const MatrixXcd expected_product = A * Y;
+      EXPECT_LT((C - expected_product).cwiseAbs().maxCoeff(), 1e-14 * A.norm() * Y.norm());
+    }
+}
+
 TEST(SdpKernels, MultiplyWithATriangularOperandMatchesEigensProduct) {
   std::mt19937 rng(41);
   expect_triangular_products_match<Eigen::MatrixXd>(rng);

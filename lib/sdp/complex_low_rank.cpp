@@ -159,9 +159,9 @@ struct SchurWorkspace {
   VectorXd mu, r, nu;        // multipliers, Schur right-hand side, row multipliers of the step (N)
 };
 
-// X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by explicit sums over the lower triangle:
-// Eigen's lazy complex product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md,
-// session 39).
+}  // namespace
+
+// (explicit sums over the lower triangle, mirrored)
 void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
   const Eigen::Index N = Y.rows(), p = Y.cols();
   X.resize(N, N);
@@ -174,9 +174,7 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
     }
 }
 
-// C = A B for A N × N and B N × p, p small (the factor's rank), column by column as sums of A's
-// columns: Eigen's complex product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
-// session 39). C (resized to N × p) must not alias A or B.
+// (column k of C as the sum of A's columns weighted by column k of B)
 void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) {
   const Eigen::Index n = A.rows();
   C.setZero(n, B.cols());
@@ -189,6 +187,8 @@ void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) {
     }
   }
 }
+
+namespace {
 
 // One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
 // N·t × N·t Hessian. The damped system (Hess + 2λ) V = −grad is

@@ -555,6 +555,14 @@ bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd&
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
                    bool saddle_exit = false, double curvature = 0);
 
+// X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by plain loops: Eigen's lazy complex
+// product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md, session 39). X is resized.
+void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
+// C = A B for A N × N and B N × p, p small (the factor's rank), by plain loops: Eigen's complex
+// product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md, session 39). C is resized
+// to N × p and must not alias A or B.
+void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::MatrixXcd& C);
+
 struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
   Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
