@@ -105,6 +105,19 @@ constexpr Eigen::Index kStaircaseMaxRows = 8;
 // random C of rank N + 1 lost (1.2–2.1×), so the limit is 12 rows (BENCHMARKS.md, session 40).
 constexpr Eigen::Index kSteepClimbMaxRows = 12;
 constexpr double kSteepClimbEig = 1e-2;
+// Above kSteepClimbMaxRows (d = 2), when C's null space has no room for a zero optimum of rank 2
+// (room_in_null_space), the rank-2 attempt can certify only a positive optimum of rank 2, and gets
+// kPositiveRankTwoSteps Newton steps instead of 25: in a sweep of the paper's plain cost (N = 5 …
+// 32; N + 1, 2N and 3N rounds; noise 0.002 … 0.1; 6 seeds, 900 instances) every one of the 245 rank-2
+// attempts that certified took at most 11 steps (all but one at most 8); past them the attempt
+// crawls toward a saddle whose factor only starts the interior point (plain_noisy N = 7: 21 steps,
+// 18 % of the solve). Sweep (4 seeds; fastest of 3, interleaved): the plain form at noise 0.01 /
+// 0.05 / 0.1, N = 7 / 8 / 12 / 16: 0.92–0.97 / 0.79–0.98 / 0.84–1.00 / 0.95–1.00 of the time; random
+// C of full rank 0.92–0.97, of rank N + 1 0.98–1.06; random C of rank 3, and every kind at N = 32
+// and 48, with the same iterations (BENCHMARKS.md, session 40). Where a zero optimum of rank 2 may
+// lie in the null space (random C of rank 3) the attempt keeps its 25 steps: capped at 10 there
+// too, it took 1.09–1.37× as long at N = 8 … 16.
+constexpr int kPositiveRankTwoSteps = 12;
 // The complex interior point's X is factored (complex_factor, pivoted Cholesky) until what
 // remains of its diagonal is below this fraction of the largest entry: at convergence the rest
 // is rounding, and dropping it keeps the factor's rank that of the optimum.
@@ -203,16 +216,18 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // that does not certify there goes to the interior point, which measures faster than
 // climbing the staircase on high-rank optima. Up to kStaircaseMaxRows rows (d = 2) it climbs
 // the whole staircase instead, 25 Newton steps a level, and up to kSteepClimbMaxRows when rank 2
-// ends with λ_min(S) < −kSteepClimbEig. Above kWarmStartMaxRows rows, where the
+// ends with λ_min(S) < −kSteepClimbEig. Above that, rank 2 gets kPositiveRankTwoSteps steps unless
+// zero_optimum_in_reach (room_in_null_space's rank_d). Above kWarmStartMaxRows rows, where the
 // interior point starts cold and the attempt serves only if it certifies, it stops once it crawls
 // (detail::CrawlWatch, f down by less than kRankDCrawlDecrease of itself in 3 steps).
-Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o) {
+Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o, bool zero_optimum_in_reach = true) {
   double crawl_decrease = 0, climb_eig = 0;
   if (o.method == Method::automatic) {
     const bool whole_staircase = d == 2 && C.rows() <= kStaircaseMaxRows;
     if (!whole_staircase && d == 2 && C.rows() <= kSteepClimbMaxRows) climb_eig = kSteepClimbEig;
     if (!whole_staircase && climb_eig == 0) o.max_rank = d;
-    o.max_newton_iterations = std::min(o.max_newton_iterations, 25);
+    const bool positive_rank_two = d == 2 && C.rows() > kSteepClimbMaxRows && !zero_optimum_in_reach;
+    o.max_newton_iterations = std::min(o.max_newton_iterations, positive_rank_two ? kPositiveRankTwoSteps : 25);
     if (C.rows() > kWarmStartMaxRows) crawl_decrease = kRankDCrawlDecrease;
   }
   // (automatic mode goes on to the interior point when the attempt does not certify, and a
@@ -264,7 +279,7 @@ Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Optio
     zero = from_null_space(C, d, detail::null_space_of(C));
     if (is_certified(zero, o)) return zero;
   }
-  Candidate rank_d = from_low_rank(C, d, o);
+  Candidate rank_d = from_low_rank(C, d, o, room.rank_d);
   rank_d.iterations += zero.iterations;
   if (is_certified(rank_d, o) || null_first || !room.feasible) return rank_d;
   zero = from_null_space(C, d, detail::null_space_of(C));
