@@ -642,8 +642,8 @@ TEST(SdpStaircase, SmallRealProblemsClimbPastRankTwo) {
 // At n = 10 and 12 automatic mode climbs past rank 2 only from a steep saddle (λ_min(S) below
 // −kSteepClimbEig at the rank-2 critical point): full-rank random C (fact-bench-sdp's
 // random_fullrank N = 5 and 6) has optima of rank 3 and 4 that the staircase certifies at the
-// interior point's objective; the plain form at N = 5 and 6, whose rank-2 saddle is shallow
-// (λ_min(S) ≈ −3e-3), goes to the interior point.
+// interior point's objective (λ_min(S) ≈ −0.06 and −0.07 at rank 2); the plain form at N = 5 and
+// 6, whose rank-2 saddle is shallow (λ_min(S) ≈ −6e-4 and −1.3e-3), goes to the interior point.
 TEST(SdpStaircase, TenAndTwelveRowsClimbOnlyFromASteepSaddle) {
   struct Case {
     std::string label;

@@ -250,8 +250,8 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
   SchurWorkspace ws(N, Y.cols());
   ws.HY.noalias() = H * Y;
   double f = cost_of(Y, ws.HY);
-  double lambda = 1e-8;  // the first shift tried: the decade at or below |curvature|/10
-  while (lambda * 10 <= 0.1 * std::abs(curvature)) lambda *= 10;
+  double lambda = 1e-8;  // the first shift tried: the decade at or below |curvature|/10, at most 1
+  while (lambda < 1.0 && lambda * 10 <= 0.1 * std::abs(curvature)) lambda *= 10;  // (NaN: 1e-8)
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
   for (; it < max_iterations; ++it) {
@@ -357,10 +357,9 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, in
 }
 
 bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd& mu, double shift) {
-  MatrixXcd S;  // H − diag(μ) + shift·I, N × N, factored in place
+  MatrixXcd S;  // H − diag(μ), N × N
   certificate_matrix(H, mu, S);
-  S.diagonal().array() += shift;
-  return cholesky_in_place(S);
+  return positive_definite_when_shifted(std::move(S), shift);
 }
 
 ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& options, int max_unknowns,

@@ -186,6 +186,14 @@ bool cholesky_in_place(Matrix& A) {
          A.diagonal().real().allFinite();
 }
 
+// True when S + t·I passes a Cholesky test (S self-adjoint, n × n, real or complex; a copy is
+// factored): λ_min(S) > −t, up to rounding at the boundary. O(n³/3), a fraction of S's spectrum.
+template <class Matrix>
+bool positive_definite_when_shifted(Matrix S, double t) {
+  S.diagonal().array() += t;
+  return cholesky_in_place(S);
+}
+
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
 // eigenvectors of the k ≤ n smallest (n × k, orthonormal): tridiagonalize with the reflectors kept,
 // tridiagonal_eigenvalues, then inverse iteration on the tridiagonal matrix at each of the k
@@ -550,8 +558,10 @@ bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd&
 // and an N × N real system, O(N³) whatever p is. With saddle_exit (p ≥ 2) it returns early
 // when S's negative curvature dominates the gradient (complex_low_rank.cpp). curvature (p ≥ 2):
 // a known λ_min(S) near Y, such as the level below's after a staircase escape; the damping's
-// first shift is then the decade at or below |curvature|/10 instead of 1e-8 (S + λI must be
-// positive definite, and the shifts below |λ_min(S)| only fail their Cholesky tests).
+// first shift is then the decade at or below |curvature|/10 (at most 1) instead of 1e-8. S + λI
+// must be positive definite, and after an escape the new S's λ_min is of the level below's
+// order, a little less negative (tight_noisy N = 5 / 6 / 12: −1.1e-3 / −1.0e-4 / −2.8e-5 below,
+// first accepted shifts 1e-3 / 1e-4 / 1e-4): the shifts from 1e-8 up only failed their tests.
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
                    bool saddle_exit = false, double curvature = 0);
 

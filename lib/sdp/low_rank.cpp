@@ -133,14 +133,6 @@ bool provably_indefinite(const Eigen::MatrixXd& S, const Eigen::MatrixXd& Y, dou
   return (S * Y).norm() > 2.0 * limit;
 }
 
-// True when the symmetric S (n × n) has an eigenvalue below −t (t > 0): S + t·I fails a Cholesky
-// test (up to rounding at the boundary). O(n³/3), a fraction of S's spectrum.
-bool has_eigenvalue_below(const Eigen::MatrixXd& S, double t) {
-  Eigen::MatrixXd shifted = S;  // S + t·I, factored in place (n × n)
-  shifted.diagonal().array() += t;
-  return !cholesky_in_place(shifted);
-}
-
 // The certificate of a factor that cannot certify (provably_indefinite): Λ and tr Λ, no
 // spectrum, and NaN for λ_min, the bound and its error.
 Certificate without_spectrum(const Eigen::MatrixXd& lambda, int d) {
@@ -169,7 +161,7 @@ LowRankOutcome solve_low_rank(const Eigen::MatrixXd& C, int d, const Options& op
     bool last_level = out.Y.cols() >= max_rank;
     if (climb_eig > 0 && out.Y.cols() == d && !last_level) {
       S = certificate_matrix(C, lambda, d);
-      last_level = !((S * out.Y).norm() < climb_eig && has_eigenvalue_below(S, climb_eig));
+      last_level = !((S * out.Y).norm() < climb_eig && !positive_definite_when_shifted(S, climb_eig));
     }
     if (spectrum_only_if_certifiable && last_level) {
       if (S.size() == 0) S = certificate_matrix(C, lambda, d);

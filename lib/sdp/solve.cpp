@@ -96,13 +96,14 @@ constexpr Eigen::Index kStaircaseMaxRows = 8;
 // past rank 2 only from a critical point (‖S Y‖_F < kSteepClimbEig) whose S has
 // λ_min < −kSteepClimbEig (C scaled to ‖C‖_F = 1; a Cholesky test of S + kSteepClimbEig·I), and
 // goes to the interior point otherwise.
-// The staircase measured 0.40–0.87 of the time where λ_min was that low (random C of full rank and
-// of rank N + 1: λ_min −0.04 … −0.13 at rank 2, optima of rank 3 and 4) but 1.3–3× where it was
-// −5e-4 … −1e-2 (the plain form, N + 1 rounds; optima of rank 4 reached by crawling levels).
-// Sweep (4 seeds each of the plain form at noise 0.01 / 0.05 / 0.1 and with 2N and 3N rounds,
-// random C of rank 3, N + 1 and full; fastest of 3, interleaved): random full rank 0.59 of the time,
-// rank N + 1 0.81 (one instance 1.31×), the other kinds 0.99–1.02, no status changes. At N = 7
-// random C of rank N + 1 lost (1.2–2.1×), so the limit is 12 rows (BENCHMARKS.md, session 40).
+// The whole staircase measured 0.40–0.87 of the time where λ_min was that low (random C of full
+// rank and of rank N + 1: λ_min −0.04 … −0.13 at rank 2, optima of rank 3 and 4; one 1.33×) but
+// mostly 1.2–3.1× where it was −5e-4 … −1.1e-2 (the plain form, N + 1 rounds; optima of rank 3 and 4
+// reached by crawling levels). Sweep (6 seeds each of the plain form at noise 0.01 / 0.05 / 0.1 and
+// at 0.05 with 2N and 3N rounds, random C of rank 3, N + 1 and full; old and new builds alternated):
+// random full rank 0.53 / 0.66 of the time at N = 5 / 6, rank N + 1 0.59 / 0.86 (one instance
+// 1.32×), the other kinds 0.99–1.02, no status changes. At N = 7 random C of rank N + 1 lost
+// (1.2–2.1×), so the limit is 12 rows (BENCHMARKS.md, session 40).
 constexpr Eigen::Index kSteepClimbMaxRows = 12;
 constexpr double kSteepClimbEig = 1e-2;
 // Above kSteepClimbMaxRows (d = 2), when C's null space has no room for a zero optimum of rank 2

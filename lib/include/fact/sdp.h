@@ -30,7 +30,8 @@ const char* to_string(Status s);
 
 enum class Method {
   automatic,         // complex_low_rank for a complex-form C (d = 2), otherwise rank-d Riemannian
-                     // Newton (the whole staircase for d = 2 and n ≤ 8) and null_space (real C);
+                     // Newton (the whole staircase for d = 2 and n ≤ 8, and for n ≤ 12 after a
+                     // steep rank-2 saddle) and null_space (real C);
                      // the interior point when they do not certify
   low_rank,          // Burer–Monteiro Riemannian staircase with block-coordinate updates
   interior_point,    // primal–dual path following (HKM direction, Mehrotra corrector); in
