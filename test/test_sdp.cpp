@@ -616,6 +616,20 @@ TEST(SdpNullSpace, PlainFormWithAZeroOptimumIsSolvedOnTheNullSpace) {
   }
 }
 
+// Automatic mode on C (d = 2) certifies an optimum of rank above 2 through `method`, at the
+// interior point's objective.
+void expect_high_rank_optimum_by(const Eigen::MatrixXd& C, Method method) {
+  const Result r = fact::sdp::solve(C, 2);
+  expect_certificate(C, 2, r);
+  EXPECT_EQ(r.method_used, method) << r.reason;
+  EXPECT_GT(r.rank, 2);
+  Options ip;
+  ip.method = Method::interior_point;
+  const Result interior = fact::sdp::solve(C, 2, ip);
+  ASSERT_TRUE(interior.certified()) << interior.reason;
+  EXPECT_NEAR(r.objective, interior.objective, 1e-8 * std::max(1.0, std::abs(interior.objective)));
+}
+
 // For d = 2 and n ≤ 8 automatic mode climbs the real staircase past rank 2 before the interior
 // point: the plain form at N = 3 and 4 and a full-rank random C at N = 4 have optima of rank 3,
 // which the staircase certifies itself, at the interior point's objective.
@@ -627,15 +641,7 @@ TEST(SdpStaircase, SmallRealProblemsClimbPastRankTwo) {
   for (const Case& c : {Case{"plain N = 3", bench_plain_noisy_cost(3)}, Case{"plain N = 4", bench_plain_noisy_cost(4)},
                         Case{"full rank N = 4", random_psd(8, 48)}}) {
     SCOPED_TRACE(c.label);
-    const Result r = fact::sdp::solve(c.C, 2);
-    expect_certificate(c.C, 2, r);
-    EXPECT_EQ(r.method_used, Method::low_rank) << r.reason;
-    EXPECT_GT(r.rank, 2);
-    Options ip;
-    ip.method = Method::interior_point;
-    const Result interior = fact::sdp::solve(c.C, 2, ip);
-    ASSERT_TRUE(interior.certified()) << interior.reason;
-    EXPECT_NEAR(r.objective, interior.objective, 1e-8 * std::max(1.0, std::abs(interior.objective)));
+    expect_high_rank_optimum_by(c.C, Method::low_rank);
   }
 }
 
@@ -655,15 +661,7 @@ TEST(SdpStaircase, TenAndTwelveRowsClimbOnlyFromASteepSaddle) {
                         Case{"plain N = 5", bench_plain_noisy_cost(5), Method::interior_point},
                         Case{"plain N = 6", bench_plain_noisy_cost(6), Method::interior_point}}) {
     SCOPED_TRACE(c.label);
-    const Result r = fact::sdp::solve(c.C, 2);
-    expect_certificate(c.C, 2, r);
-    EXPECT_EQ(r.method_used, c.expected) << r.reason;
-    EXPECT_GT(r.rank, 2);
-    Options ip;
-    ip.method = Method::interior_point;
-    const Result interior = fact::sdp::solve(c.C, 2, ip);
-    ASSERT_TRUE(interior.certified()) << interior.reason;
-    EXPECT_NEAR(r.objective, interior.objective, 1e-8 * std::max(1.0, std::abs(interior.objective)));
+    expect_high_rank_optimum_by(c.C, c.expected);
   }
 }
 
