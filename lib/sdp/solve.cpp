@@ -264,13 +264,14 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
 }
 
 // Automatic mode on a real C: rank-d Newton (from_low_rank; the whole staircase for d = 2 and
-// n ≤ kStaircaseMaxRows, or n ≤ kSteepClimbMaxRows after a steep rank 2) and the zero optimum (from_null_space), the first that certifies, else
-// the low-rank candidate (the interior point's warm start) with both runs' steps. The null space
-// goes first when it may hold a feasible X but generically none of rank d: then a zero optimum, if
-// there is one, is out of rank-d Newton's reach (the plain form from N = 7 on, k = N − 1:
-// plain_noisy N = 12 spent 15 of its 17 steps there; BENCHMARKS.md, session 22). The order is
-// decided on k estimated by pivoted_rank (C's spectrum, which the null space needs, cost a third
-// more than the whole solve of random_lowrank N = 100, which rank-d Newton certifies).
+// n ≤ kStaircaseMaxRows, or n ≤ kSteepClimbMaxRows after a steep rank 2) and the zero optimum
+// (from_null_space), the first that certifies, else the low-rank candidate (the interior point's
+// warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
+// generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
+// reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
+// there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's
+// spectrum, which the null space needs, cost a third more than the whole solve of random_lowrank
+// N = 100, which rank-d Newton certifies).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o) {
   const detail::NullSpaceRoom room =
       detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
