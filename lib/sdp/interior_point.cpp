@@ -288,9 +288,7 @@ void unit_diagonal_blocks(Eigen::MatrixXd& X, int d) {
 // 27); otherwise s = 2, which |λ(C)| ≤ ‖C‖_F = 1 keeps positive definite.
 double cold_start_shift(const Eigen::MatrixXd& C) {
   const double shift = 1.0 / std::sqrt(static_cast<double>(C.rows()));
-  Eigen::MatrixXd Z = C;  // C + (s/2)·I, factored in place (n × n)
-  Z.diagonal().array() += 0.5 * shift;
-  return cholesky_in_place(Z) ? shift : 2.0;
+  return positive_definite_when_shifted(C, 0.5 * shift) ? shift : 2.0;
 }
 
 Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
@@ -303,11 +301,9 @@ Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
                     double mix, InteriorPointOutcome& start) {
   const Eigen::Index n = C.rows();
-  Eigen::MatrixXd Z(n, n);  // C − Λ + s·I, factored in place
+  const Eigen::MatrixXd S = certificate_matrix(C, lambda, d);  // C − Λ (n × n)
   for (double shift = 1e-3; shift <= 1.0; shift *= 10) {
-    certificate_matrix(C, lambda, d, Z);
-    Z.diagonal().array() += shift;
-    if (!cholesky_in_place(Z)) continue;
+    if (!positive_definite_when_shifted(S, shift)) continue;
     start.X.noalias() = (1.0 - mix) * (Y * Y.transpose());
     start.X.diagonal().array() += mix;
     start.lambda = lambda;
