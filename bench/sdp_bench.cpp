@@ -46,17 +46,21 @@ struct Args {
   int peer_max_n = 100;
   bool peers = true;
   bool quick = false;  // --quick: max_n at most 16, applied after all flags
+  bool stages = false;  // --stages: each row's methods (Result::stages) under it
   std::string out = "bench/results/sdp.csv";
 };
 
 void print_usage(std::ostream& os) {
   os << "usage: fact-bench-sdp [--max-n N] [--quick] [--reps R] [--out FILE] [--no-peers] [--peer-max-n N]\n"
+        "                      [--stages]\n"
         "  --max-n N       largest swarm size N to run (sizes: 2..8, 12, 16, 32, 64, 100, 200)\n"
         "  --quick         only N <= 16\n"
         "  --reps R        repetitions per solver; times are medians (default 3)\n"
         "  --out FILE      CSV output (default bench/results/sdp.csv, folders are created)\n"
         "  --no-peers      time fact::sdp::solve only\n"
         "  --peer-max-n N  run SDPA/CSDP only up to this N (default 100); larger shows '-'\n"
+        "  --stages        under each row, the methods our solve ran: iterations, ms (of the\n"
+        "                  last repetition) and how each ended\n"
         "For steady peer timings run with OPENBLAS_NUM_THREADS=1.\n";
 }
 
@@ -83,6 +87,7 @@ bool parse_args(int argc, char** argv, Args* args) {
     else if (flag == "--out") args->out = value();
     else if (flag == "--no-peers") args->peers = false;
     else if (flag == "--peer-max-n") args->peer_max_n = parse_int(flag, value(), 0);
+    else if (flag == "--stages") args->stages = true;
     else throw std::invalid_argument("unknown flag '" + flag + "'");
   }
   if (args->quick) args->max_n = std::min(args->max_n, 16);  // whatever the flags' order
@@ -200,6 +205,18 @@ void print_row(const Row& r) {
   std::fflush(stdout);
 }
 
+// The methods of a row's solve (Result::stages), one line: "stages: low_rank 7 it 0.23 ms (not
+// certified) > dual_scaling …".
+void print_stages(const Row& r) {
+  std::string line = "     stages:";
+  for (const fact::sdp::Stage& stage : r.ours.result.stages) {
+    if (line.back() != ':') line += " >";
+    line += " " + stage.method + " " + std::to_string(stage.iterations) + " it " + fmt(stage.time_ms, "%.3f", "nan") +
+            " ms (" + stage.outcome + ")";
+  }
+  std::printf("%s\n", line.c_str());
+}
+
 const char* kCsvHeader = "n,instance,ours_ms,sdpa_ms,csdp_ms,rel_obj_diff_sdpa,rel_obj_diff_csdp,gap,min_eig_S,status";
 
 // One CSV line; n is the swarm size N (the matrix is 2N × 2N). Skipped peers are "nan".
@@ -305,6 +322,7 @@ int run(const Args& args) {
       rows.push_back(run_one(drones, name, args));
       clear_progress();
       print_row(rows.back());
+      if (args.stages) print_stages(rows.back());
       csv += csv_line(rows.back()) + "\n";
     }
   print_summary(rows);

@@ -1133,4 +1133,71 @@ TEST(SdpReview, GapWithinTheBoundsRoundingCertifies) {
   }
 }
 
+// Result::stages names the methods a solve ran, in order, each with its own iterations (they add
+// up to Result::iterations) and how it ended. Automatic mode: a noise-free tight C certifies in the
+// complex staircase alone; a noisy tight one at N = 32 goes on to complex dual scaling and Newton;
+// a random full-rank C at N = 25 (50 rows, above the warm start's 48) tries rank-2 Newton, then
+// dual scaling from the cold start (not the primal–dual method), and ends certified. An explicit
+// method runs alone; invalid input runs nothing.
+std::vector<std::string> methods_of(const Result& r) {
+  std::vector<std::string> names;
+  for (const fact::sdp::Stage& stage : r.stages) names.push_back(stage.method);
+  return names;
+}
+
+void expect_stages_add_up(const Result& r) {
+  int iterations = 0;
+  for (const fact::sdp::Stage& stage : r.stages) {
+    EXPECT_GE(stage.iterations, 0) << stage.method;
+    EXPECT_TRUE(std::isfinite(stage.time_ms) && stage.time_ms >= 0) << stage.method << ": " << stage.time_ms;
+    EXPECT_FALSE(stage.outcome.empty()) << stage.method;
+    iterations += stage.iterations;
+  }
+  EXPECT_EQ(iterations, r.iterations);
+  if (r.certified()) {  // (an interior point that converged gives the certified X itself)
+    EXPECT_TRUE(std::any_of(r.stages.begin(), r.stages.end(),
+                            [](const auto& s) { return s.outcome == "certified" || s.outcome == "converged"; }))
+        << r.reason;
+  }
+}
+
+TEST(SdpStages, NameTheMethodsASolveRanInOrder) {
+  const Result tight = fact::sdp::solve(fact::sdp::complex_form(fact::test::plain_cost(8, 12, 0.0, 1)), 2);
+  ASSERT_TRUE(tight.certified()) << tight.reason;
+  EXPECT_EQ(methods_of(tight), std::vector<std::string>{"complex_low_rank"});
+  EXPECT_EQ(tight.stages[0].outcome, "certified");
+  expect_stages_add_up(tight);
+
+  const Result noisy = fact::sdp::solve(fact::sdp::complex_form(noisy_plain_cost(32, 1)), 2);
+  ASSERT_TRUE(noisy.certified()) << noisy.reason;
+  const std::vector<std::string> noisy_methods = methods_of(noisy);
+  ASSERT_GE(noisy_methods.size(), 3u);
+  EXPECT_EQ(noisy_methods[0], "complex_low_rank");
+  EXPECT_EQ(noisy.stages[0].outcome, "not certified");
+  EXPECT_EQ(noisy_methods[1], "complex_dual_scaling");
+  EXPECT_EQ(noisy.stages[1].outcome, "handed off");
+  EXPECT_EQ(noisy_methods.back(), "complex_newton");
+  expect_stages_add_up(noisy);
+
+  const Eigen::MatrixXd full = random_psd(50, 7);
+  const Result cold = fact::sdp::solve(full, 2);
+  ASSERT_TRUE(cold.certified()) << cold.reason;
+  const std::vector<std::string> cold_methods = methods_of(cold);
+  ASSERT_GE(cold_methods.size(), 2u);
+  EXPECT_EQ(cold_methods[0], "low_rank");
+  EXPECT_EQ(cold_methods[1], "dual_scaling");
+  expect_stages_add_up(cold);
+
+  Options interior;
+  interior.method = Method::interior_point;
+  const Result alone = fact::sdp::solve(full, 2, interior);
+  EXPECT_EQ(methods_of(alone), std::vector<std::string>{"interior_point"});
+  EXPECT_EQ(alone.stages[0].outcome, "converged");
+  expect_stages_add_up(alone);
+
+  const Result invalid = fact::sdp::solve(Eigen::MatrixXd::Identity(3, 3), 2);
+  EXPECT_EQ(invalid.status, Status::invalid_input);
+  EXPECT_TRUE(invalid.stages.empty());
+}
+
 }  // namespace

@@ -474,8 +474,9 @@ TEST(SdpDualScaling, HandsOffAtTheFirstPairWhoseTrueGapIsBelowTheHandOffGap) {
 // after finding a primal point (the paper's noise-free cost at N = 12, optimum near 0, seed 2) the
 // primal–dual method resumed from its pair, and without one (N = 1: X = I is the only feasible
 // point, which its upper bound already is) the primal–dual method from X = I; the iterations of
-// both count.
+// both count, and each run is a stage of its own.
 TEST(SdpDualScaling, ThenTheInteriorPointWhenItGivesUp) {
+  using fact::sdp::Stage;
   using fact::sdp::detail::dual_scaling_then_interior_point;
   using fact::sdp::detail::solve_dual_scaling;
   const Options o;
@@ -486,10 +487,15 @@ TEST(SdpDualScaling, ThenTheInteriorPointWhenItGivesUp) {
   const InteriorPointOutcome alone =
       solve_dual_scaling(full, 2, o, 1e-5, fact::sdp::detail::cold_start_lambda(full, 2), full.trace());
   ASSERT_TRUE(alone.handed_off) << alone.reason;
-  const InteriorPointOutcome handed = dual_scaling_then_interior_point(full, 2, o, 1e-5);
+  std::vector<Stage> stages;
+  const InteriorPointOutcome handed = dual_scaling_then_interior_point(full, 2, o, 1e-5, stages);
   EXPECT_TRUE(handed.handed_off);
   EXPECT_EQ(handed.iterations, alone.iterations);
   EXPECT_EQ((handed.X - alone.X).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_EQ(stages.size(), 1u);
+  EXPECT_EQ(stages[0].method, "dual_scaling");
+  EXPECT_EQ(stages[0].iterations, alone.iterations);
+  EXPECT_EQ(stages[0].outcome, "handed off");
 
   Eigen::MatrixXd C = fact::test::plain_cost(12, 13, 0.0, 2);
   C /= C.norm();
@@ -498,9 +504,16 @@ TEST(SdpDualScaling, ThenTheInteriorPointWhenItGivesUp) {
   ASSERT_FALSE(gave_up.handed_off || gave_up.converged);
   ASSERT_EQ(gave_up.X.rows(), C.rows()) << gave_up.reason;
   const InteriorPointOutcome resumed = solve_interior_point(C, 2, o, 1e-5, &gave_up);
-  const InteriorPointOutcome both = dual_scaling_then_interior_point(C, 2, o, 1e-5);
+  stages.clear();
+  const InteriorPointOutcome both = dual_scaling_then_interior_point(C, 2, o, 1e-5, stages);
   EXPECT_TRUE(both.handed_off || both.converged) << both.reason;
   EXPECT_EQ(both.iterations, gave_up.iterations + resumed.iterations);
+  ASSERT_EQ(stages.size(), 2u);
+  EXPECT_EQ(stages[0].method, "dual_scaling");
+  EXPECT_EQ(stages[0].iterations, gave_up.iterations);
+  EXPECT_EQ(stages[0].outcome, gave_up.reason);
+  EXPECT_EQ(stages[1].method, "interior_point");
+  EXPECT_EQ(stages[1].iterations, resumed.iterations);
   EXPECT_EQ((both.X - resumed.X).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_LT(gap_of(C, both), 1e-5);
 
@@ -509,8 +522,12 @@ TEST(SdpDualScaling, ThenTheInteriorPointWhenItGivesUp) {
       solve_dual_scaling(one, 2, o, 1e-5, fact::sdp::detail::cold_start_lambda(one, 2), one.trace());
   ASSERT_EQ(none.X.size(), 0);
   const InteriorPointOutcome cold = solve_interior_point(one, 2, o, 1e-5);
-  const InteriorPointOutcome fallback = dual_scaling_then_interior_point(one, 2, o, 1e-5);
+  stages.clear();
+  const InteriorPointOutcome fallback = dual_scaling_then_interior_point(one, 2, o, 1e-5, stages);
   EXPECT_EQ(fallback.iterations, none.iterations + cold.iterations);
+  ASSERT_EQ(stages.size(), 2u);
+  EXPECT_EQ(stages[0].iterations, none.iterations);
+  EXPECT_EQ(stages[1].iterations, cold.iterations);
   EXPECT_EQ((fallback.X - cold.X).cwiseAbs().maxCoeff(), 0.0);
 }
 

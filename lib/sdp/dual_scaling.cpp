@@ -145,13 +145,17 @@ InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const O
 }
 
 InteriorPointOutcome dual_scaling_then_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
-                                                      double handoff_gap) {
+                                                      double handoff_gap, std::vector<Stage>& stages) {
+  auto start = std::chrono::steady_clock::now();
   InteriorPointOutcome ip = solve_dual_scaling(C, d, options, handoff_gap, cold_start_lambda(C, d), C.trace());
+  record_stage(stages, "dual_scaling", ip.iterations, start, outcome_of(ip));
   if (ip.handed_off || ip.converged) return ip;
   // solve_interior_point counts only its own iterations; resumed, its budget starts after dual
   // scaling's.
   const int scaling_iterations = ip.iterations;
+  start = std::chrono::steady_clock::now();
   ip = solve_interior_point(C, d, options, handoff_gap, ip.X.size() > 0 ? &ip : nullptr);
+  record_stage(stages, "interior_point", ip.iterations, start, outcome_of(ip));
   ip.iterations += scaling_iterations;
   return ip;
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -452,13 +453,26 @@ void unit_diagonal_blocks(Eigen::MatrixXd& X, int d);
 InteriorPointOutcome solve_dual_scaling(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
                                         const Eigen::MatrixXd& lambda0, double upper_bound);
 
+// Appends the Stage (Result::stages) of a method that started at `start` and has ended.
+inline void record_stage(std::vector<Stage>& stages, const char* method, int iterations,
+                         std::chrono::steady_clock::time_point start, std::string outcome) {
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stages.push_back({method, iterations, ms, std::move(outcome)});
+}
+// An interior point's or dual scaling's Stage::outcome.
+template <class InteriorPoint>
+std::string outcome_of(const InteriorPoint& ip) {
+  return ip.converged ? "converged" : ip.handed_off ? "handed off" : ip.reason;
+}
+
 // The interior point without a warm start, to handoff_gap (automatic mode in solve()): dual
 // scaling from the cold start (cold_start_lambda, with tr C = ⟨C, I⟩ as the upper bound), and the
 // primal–dual method when it gives up: from its pair when it found a primal point, else from
 // X = I. iterations counts both methods' (the resumed primal–dual run counts from dual scaling's,
-// so max_ipm_iterations bounds them together when it resumes).
+// so max_ipm_iterations bounds them together when it resumes); each method's own run is appended
+// to stages ("dual_scaling", "interior_point").
 InteriorPointOutcome dual_scaling_then_interior_point(const Eigen::MatrixXd& C, int d, const Options& options,
-                                                      double handoff_gap);
+                                                      double handoff_gap, std::vector<Stage>& stages);
 
 // A strictly feasible start for the interior point from a factor Y (n × r, orthonormal-row d × r
 // blocks) of a point near the optimum and its multipliers lambda (n × d, Λ_ii stacked; the

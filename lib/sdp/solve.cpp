@@ -128,10 +128,16 @@ struct Candidate {
   Eigen::MatrixXd Y;      // n × r factor of X
   Certificate cert;       // certificate for it (scaled problem)
   double primal = 0;      // ⟨C, Y Yᵀ⟩ (scaled), from primal_objective, set with cert
-  int iterations = 0;
   Method method = Method::low_rank;
   std::string note;       // why the method stopped, when it did not converge
 };
+
+// Each method that runs appends its Stage (Result::stages) when it ends (detail::record_stage),
+// to the Stages the solve passes down.
+using Clock = std::chrono::steady_clock;
+using Stages = std::vector<Stage>;
+using detail::outcome_of;
+constexpr auto record = detail::record_stage;
 
 // The relative gap (detail::relative_gap) of a primal objective and a dual bound.
 double relative_gap(double primal, double dual) { return detail::relative_gap(primal - dual, primal, dual); }
@@ -199,15 +205,21 @@ bool misses_only_the_gap(const Candidate& c, const Options& o) {
   return c.cert.min_eig >= -o.psd_tol && !is_certified(c, o);
 }
 
+// The Stage::outcome of a method that produced the candidate c.
+std::string outcome_of(const Candidate& c, const Options& o) {
+  return is_certified(c, o) ? "certified" : c.note.empty() ? "not certified" : c.note;
+}
+
 // c after one more Newton step (grad_tol 0: always taken, unless no damping is accepted) when it
 // misses only the gap and the step certifies; c itself otherwise. c's certificate is its own
-// factor's (certify_factor, with the same complex_form).
-Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form = false) {
+// factor's (certify_factor, with the same complex_form). The step taken, if any, is added to steps.
+Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, int& steps,
+                             bool complex_form = false) {
   if (!misses_only_the_gap(c, o)) return c;
   Candidate next = c;
-  const int steps = detail::newton_refine(C, d, next.Y, 1, 0.0);
-  if (steps == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
-  next.iterations += steps;
+  const int taken = detail::newton_refine(C, d, next.Y, 1, 0.0);
+  steps += taken;
+  if (taken == 0) return c;  // Y unchanged (no tangent directions, or no step accepted)
   certify_factor(C, d, next, complex_form);
   return is_certified(next, o) ? next : c;
 }
@@ -221,7 +233,8 @@ Candidate with_one_more_step(const Eigen::MatrixXd& C, int d, Candidate c, const
 // zero_optimum_in_reach (room_in_null_space's rank_d). Above kWarmStartMaxRows rows, where the
 // interior point starts cold and the attempt serves only if it certifies, it stops once it crawls
 // (detail::CrawlWatch, f down by less than kRankDCrawlDecrease of itself in 3 steps).
-Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o, bool zero_optimum_in_reach = true) {
+Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o, Stages& stages, bool zero_optimum_in_reach = true) {
+  const Clock::time_point start = Clock::now();
   double crawl_decrease = 0, climb_eig = 0;
   if (o.method == Method::automatic) {
     const bool whole_staircase = d == 2 && C.rows() <= kStaircaseMaxRows;
@@ -235,19 +248,23 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o, bool zero_op
   // certificate without a spectrum never replaces its result)
   detail::LowRankOutcome lr =
       detail::solve_low_rank(C, d, o, crawl_decrease, o.method == Method::automatic, climb_eig);
-  Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, lr.iterations, Method::low_rank, {}};
+  Candidate c{std::move(lr.Y), std::move(lr.certificate), 0, Method::low_rank, {}};
   c.primal = primal_objective(C, c.Y, c.cert, d);
-  return with_one_more_step(C, d, std::move(c), o);
+  int steps = lr.iterations;
+  c = with_one_more_step(C, d, std::move(c), o, steps);
+  record(stages, "low_rank", steps, start, outcome_of(c, o));
+  return c;
 }
 
 // The zero optimum (null_space.cpp), real C only: a factor in C's null space and Λ = 0. Without
 // one, a candidate with no factor and the reason in its note.
-Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpace& null) {
+Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
+  const Clock::time_point start = Clock::now();
+  const detail::NullSpace null = detail::null_space_of(C);
   detail::NullSpaceOutcome out;
   Candidate c;
   c.method = Method::null_space;
   const bool found = detail::zero_optimum(C, d, null, out);
-  c.iterations = out.steps;
   if (found) {
     c.Y = std::move(out.Y);
     c.cert = std::move(out.certificate);
@@ -260,40 +277,36 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const detail::NullSpa
     c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", null.dimension,
                              out.steps);
   }
+  record(stages, "null_space", out.steps, start, outcome_of(c, o));
   return c;
 }
 
 // Automatic mode on a real C: rank-d Newton (from_low_rank; the whole staircase for d = 2 and
 // n ≤ kStaircaseMaxRows, or n ≤ kSteepClimbMaxRows after a steep rank 2) and the zero optimum
 // (from_null_space), the first that certifies, else the low-rank candidate (the interior point's
-// warm start) with both runs' steps. The null space goes first when it may hold a feasible X but
+// warm start). The null space goes first when it may hold a feasible X but
 // generically none of rank d: then a zero optimum, if there is one, is out of rank-d Newton's
 // reach (the plain form from N = 7 on, k = N − 1: plain_noisy N = 12 spent 15 of its 17 steps
 // there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's
 // spectrum, which the null space needs, cost a third more than the whole solve of random_lowrank
 // N = 100, which rank-d Newton certifies).
-Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o) {
+Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
   const detail::NullSpaceRoom room =
       detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
   const bool null_first = room.feasible && !room.rank_d;
-  Candidate zero;
   if (null_first) {
-    zero = from_null_space(C, d, detail::null_space_of(C));
+    Candidate zero = from_null_space(C, d, o, stages);
     if (is_certified(zero, o)) return zero;
   }
-  Candidate rank_d = from_low_rank(C, d, o, room.rank_d);
-  rank_d.iterations += zero.iterations;
+  Candidate rank_d = from_low_rank(C, d, o, stages, room.rank_d);
   if (is_certified(rank_d, o) || null_first || !room.feasible) return rank_d;
-  zero = from_null_space(C, d, detail::null_space_of(C));
-  zero.iterations += rank_d.iterations;
-  if (is_certified(zero, o)) return zero;
-  rank_d.iterations = zero.iterations;
-  return rank_d;
+  Candidate zero = from_null_space(C, d, o, stages);
+  return is_certified(zero, o) ? zero : rank_d;
 }
 
 // A complex outcome on H (C = emb(H), scaled) as a candidate: factor and certificate in d = 2 terms.
 Candidate candidate_of(const Eigen::MatrixXd& C, const detail::ComplexOutcome& out, Method method) {
-  Candidate c{detail::real_factor(out.Y), detail::complex_certificate(out), 0, out.iterations, method, {}};
+  Candidate c{detail::real_factor(out.Y), detail::complex_certificate(out), 0, method, {}};
   c.primal = primal_objective(C, c.Y, c.cert, 2);
   return c;
 }
@@ -302,7 +315,8 @@ Candidate candidate_of(const Eigen::MatrixXd& C, const detail::ComplexOutcome& o
 // the real rank-d path: on the non-unique N = 200 instance rank 1 otherwise spends 60 steps
 // (54 ms) before the interior point takes over. When rank 1 is the only level (N > 26, where
 // rank 2's system would exceed kComplexMaxUnknowns) it gets kOnlyLevelSteps.
-Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
+Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o, Stages& stages) {
+  const Clock::time_point start = Clock::now();
   const bool automatic = o.method == Method::automatic;
   const int max_unknowns = automatic ? kComplexMaxUnknowns : kMaxPolishSize;
   const bool only_level = detail::complex_newton_unknowns(C.rows() / 2, 2) > max_unknowns;  // rank 2 does not fit
@@ -312,20 +326,29 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o) {
   // follows and its certificate replaces this one's (0.6 ms at N = 100, 3.2 ms at N = 200).
   detail::ComplexOutcome out = detail::solve_complex_low_rank(H, o, max_unknowns, !automatic);
   Candidate c = candidate_of(C, out, Method::complex_low_rank);
-  if (!misses_only_the_gap(c, o)) return c;
-  const int steps = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as with_one_more_step (complex)
-  if (steps == 0) return c;
-  Candidate next = candidate_of(C, detail::complex_outcome(H, std::move(out.Y), out.iterations + steps, false),
-                                Method::complex_low_rank);
-  return is_certified(next, o) ? next : c;
+  int steps = out.iterations;
+  if (misses_only_the_gap(c, o)) {
+    const int more = detail::complex_newton(H, out.Y, 1, 0.0);  // one more step, as with_one_more_step (complex)
+    steps += more;
+    if (more > 0) {
+      Candidate next =
+          candidate_of(C, detail::complex_outcome(H, std::move(out.Y), 0, false), Method::complex_low_rank);
+      if (is_certified(next, o)) c = std::move(next);
+    }
+  }
+  record(stages, "complex_low_rank", steps, start, outcome_of(c, o));
+  return c;
 }
 
 // Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
 // (complex form only, H = hermitian_of(C)) for at most max_steps steps.
-Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations,
-                         int max_steps) {
-  iterations += detail::complex_newton(H, Y, max_steps, 1e-12);
-  return candidate_of(C, detail::complex_outcome(H, std::move(Y), iterations, false), Method::interior_point);
+Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int max_steps,
+                         const Options& o, Stages& stages) {
+  const Clock::time_point start = Clock::now();
+  const int steps = detail::complex_newton(H, Y, max_steps, 1e-12);
+  Candidate c = candidate_of(C, detail::complex_outcome(H, std::move(Y), steps, false), Method::interior_point);
+  record(stages, "complex_newton", steps, start, outcome_of(c, o));
+  return c;
 }
 
 // The complex interior point on H (complex form, automatic mode), started from the staircase's
@@ -341,42 +364,44 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
 // keeps S = H − diag(y) positive definite and its X (factored down to kComplexFactorCutoff,
 // rows renormalised) is feasible, so the pair certifies without a polish; when the interior point
 // stops short of the gap, complex Newton from its X gets kComplexPolishSteps steps.
-Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o, const Eigen::MatrixXd& staircase_Y) {
+Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o, const Eigen::MatrixXd& staircase_Y,
+                                      Stages& stages) {
+  Clock::time_point started = Clock::now();
   const Eigen::MatrixXcd H = detail::hermitian_of(C);
   detail::ComplexInteriorPointOutcome start;
   const Eigen::MatrixXcd Y = staircase_Y.size() > 0 ? detail::complex_of_real_factor(staircase_Y) : Eigen::MatrixXcd();
   const bool warm = Y.size() > 0 && detail::complex_interior_start(H, Y, kInteriorStartMix, start);
   detail::ComplexInteriorPointOutcome ip;
-  if (warm)  // upper bound: the objective of the primal–dual method's warm start X
+  if (warm) {  // upper bound: the objective of the primal–dual method's warm start X
     ip = detail::solve_complex_dual_scaling(H, o, kComplexHandoffGap, start.y,
                                             (H.array() * start.X.array().conjugate()).real().sum());
-  if (!ip.handed_off && !ip.converged) {
-    // No start, or dual scaling gave up: the primal–dual method, from dual scaling's best primal
-    // point and last y when it found one (a strictly feasible pair, closer to the optimum than
-    // the start; the resumed run counts its iterations), else from the start.
-    const bool resumable = ip.X.size() > 0;
-    const int wasted = resumable ? 0 : ip.iterations;
-    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap, resumable ? &ip : (warm ? &start : nullptr));
-    ip.iterations += wasted;
+    record(stages, "complex_dual_scaling", ip.iterations, started, outcome_of(ip));
   }
-  if (warm && !ip.handed_off && !ip.converged) {  // the warm start stalled (4 of 240 sweep instances,
-    const int wasted = ip.iterations;              // N = 27 … 100, near a relative gap of 1): start cold
-    ip = detail::solve_complex_interior_point(H, o, kComplexHandoffGap);
-    ip.iterations += wasted;
-  }
+  // The primal–dual method to handoff_gap from `from` (X = I and y = −2 without one), into ip.
+  const auto primal_dual = [&](double handoff_gap, const detail::ComplexInteriorPointOutcome* from) {
+    started = Clock::now();
+    ip = detail::solve_complex_interior_point(H, o, handoff_gap, from);
+    record(stages, "complex_interior_point", ip.iterations, started, outcome_of(ip));
+  };
+  // No start, or dual scaling gave up: the primal–dual method, from dual scaling's best primal
+  // point and last y when it found one (a strictly feasible pair, closer to the optimum than
+  // the start), else from the start.
+  if (!ip.handed_off && !ip.converged)
+    primal_dual(kComplexHandoffGap, ip.X.size() > 0 ? &ip : (warm ? &start : nullptr));
+  // The warm start stalled (4 of 240 sweep instances, N = 27 … 100, near a relative gap of 1): cold.
+  if (warm && !ip.handed_off && !ip.converged) primal_dual(kComplexHandoffGap, nullptr);
   if (ip.handed_off) {
     const Candidate handed =
-        complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), ip.iterations, kComplexHandoffSteps);
+        complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), kComplexHandoffSteps, o, stages);
     if (is_certified(handed, o)) return handed;
-    ip.iterations = handed.iterations;  // the Newton steps count
-    ip = detail::solve_complex_interior_point(H, o, 0.0, &ip);
+    primal_dual(0.0, &ip);  // resumed where it handed off, to convergence
   }
-  Candidate c = candidate_of(C, detail::complex_outcome(H, detail::complex_factor(ip.X, kComplexFactorCutoff), ip.y,
-                                                        ip.iterations, false),
-                             Method::interior_point);
+  Candidate c = candidate_of(
+      C, detail::complex_outcome(H, detail::complex_factor(ip.X, kComplexFactorCutoff), ip.y, ip.iterations, false),
+      Method::interior_point);
   c.note = ip.reason;
   if (is_certified(c, o)) return c;
-  Candidate polished = complex_polish(C, H, detail::complex_factor(ip.X, 1e-6), ip.iterations, kComplexPolishSteps);
+  Candidate polished = complex_polish(C, H, detail::complex_factor(ip.X, 1e-6), kComplexPolishSteps, o, stages);
   return is_certified(polished, o) ? polished : c;
 }
 
@@ -385,7 +410,6 @@ Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPo
   c.Y = detail::factor_psd(ip.X, 0.0);
   c.cert = detail::certify(C, ip.lambda, d, false);
   c.primal = primal_objective(C, c.Y, c.cert, d);
-  c.iterations = ip.iterations;
   c.method = Method::interior_point;
   c.note = ip.reason;
   return c;
@@ -419,16 +443,19 @@ PolishSize polish_size(const Eigen::MatrixXd& Y, int d) {
 // was polished to λ_min(S) = −9e-14 and a gap of 4.1e-9, and the interior point resumed: 27
 // iterations and steps in all, 23 with the one step.
 std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate& ip, int max_unknowns, int max_steps,
-                                const Options& o) {
+                                const Options& o, Stages& stages) {
+  const Clock::time_point start = Clock::now();
   const PolishSize size = polish_size(ip.Y, d);
   if (size.rank < d || size.unknowns > max_unknowns) return std::nullopt;
   Eigen::MatrixXd Y = ip.Y.leftCols(size.rank);
   if (!detail::project_blocks(Y, d)) return std::nullopt;
   Candidate c = ip;
-  c.iterations += detail::newton_refine(C, d, Y, max_steps, 1e-12);
+  int steps = detail::newton_refine(C, d, Y, max_steps, 1e-12);
   c.Y = std::move(Y);
   certify_factor(C, d, c);
-  return with_one_more_step(C, d, std::move(c), o);
+  c = with_one_more_step(C, d, std::move(c), o, steps);
+  record(stages, "newton_polish", steps, start, outcome_of(c, o));
+  return c;
 }
 
 // The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
@@ -446,38 +473,38 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // and plain_noisy N = 5 but lost up to 40 % where the optimum is near 0 (plain and the paper's
 // cost at N = 12: 26–32 iterations against 13), so the warm start keeps the primal–dual method
 // (BENCHMARKS.md, session 38).
-Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form,
+Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o, bool complex_form, Stages& stages,
                               const Candidate* warm = nullptr) {
   const int n = static_cast<int>(C.rows());
   const double handoff = o.method == Method::automatic ? kHandoffGap : 0.0;
+  // The primal–dual method to handoff_gap from `from` (X = I without one), as a stage.
+  const auto primal_dual = [&](double handoff_gap, const detail::InteriorPointOutcome* from) {
+    const Clock::time_point start = Clock::now();
+    detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, handoff_gap, from);
+    record(stages, "interior_point", ip.iterations, start, outcome_of(ip));
+    return ip;
+  };
   detail::InteriorPointOutcome start;
   const bool warm_start = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d &&
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
   detail::InteriorPointOutcome ip = !warm_start && o.method == Method::automatic
-                                        ? detail::dual_scaling_then_interior_point(C, d, o, handoff)
-                                        : detail::solve_interior_point(C, d, o, handoff, warm_start ? &start : nullptr);
-  if (warm_start && !ip.handed_off && !ip.converged) {  // the warm start stalled: start cold
-    const int wasted = ip.iterations;
-    ip = detail::solve_interior_point(C, d, o, handoff);
-    ip.iterations += wasted;
-  }
+                                        ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
+                                        : primal_dual(handoff, warm_start ? &start : nullptr);
+  if (warm_start && !ip.handed_off && !ip.converged) ip = primal_dual(handoff, nullptr);  // the warm start stalled
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
   if (complex_form) {
     polished =
-        complex_polish(C, detail::hermitian_of(C), detail::complex_factor_of(ip.X), ip.iterations, kComplexPolishSteps);
+        complex_polish(C, detail::hermitian_of(C), detail::complex_factor_of(ip.X), kComplexPolishSteps, o, stages);
   } else {
     Candidate handed;  // only the factor: polish certifies its own result
     handed.Y = detail::leading_factor(ip.X, kHandoffFactorCutoff);
-    handed.iterations = ip.iterations;
     handed.method = Method::interior_point;
-    polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, o);
+    polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, o, stages);
   }
   if (polished && is_certified(*polished, o)) return *polished;
-  detail::InteriorPointOutcome rest = detail::solve_interior_point(C, d, o, 0.0, &ip);
-  rest.iterations += ip.iterations;
-  return candidate_of(C, d, rest);
+  return candidate_of(C, d, primal_dual(0.0, &ip));  // resumed where it handed off
 }
 
 // The singular values of Y (n × r) above 1e-4 of the largest, counted from the eigenvalues of
@@ -513,18 +540,21 @@ int nullity(const Certificate& cert, const Options& o) {
 // when that does not certify the result stands as it was. On the complex form Λ keeps the form
 // μ_i I₂ (certify_factor's complex_form), so its certificate stays that of the Hermitian problem.
 // Automatic mode only (an explicit method returns its own factor and certificate).
-Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form) {
+Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Options& o, bool complex_form,
+                         Stages& stages) {
   if (!is_certified(c, o) || nullity(c.cert, o) != d) return c;
+  const Clock::time_point start = Clock::now();
   // X's top-d eigenvectors scaled by √eigenvalue, Y V_d with V_d the top-d eigenvectors of the
   // r × r Gram matrix Yᵀ Y (r is up to n for the interior point's factor): n × d.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(c.Y.transpose() * c.Y);
   Eigen::MatrixXd Y = c.Y * gram.eigenvectors().rightCols(d);
   if (!detail::project_blocks(Y, d)) return c;
   Candidate polished = c;
-  polished.iterations += detail::newton_refine(C, d, Y, 20, 1e-12);
+  int steps = detail::newton_refine(C, d, Y, 20, 1e-12);
   polished.Y = std::move(Y);
   certify_factor(C, d, polished, complex_form);
-  polished = with_one_more_step(C, d, std::move(polished), o, complex_form);
+  polished = with_one_more_step(C, d, std::move(polished), o, steps, complex_form);
+  record(stages, "unique_rank_newton", steps, start, outcome_of(polished, o));
   return is_certified(polished, o) ? polished : c;
 }
 
@@ -601,26 +631,27 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     return r;
   }
   Candidate best;
+  Stages stages;
+  stages.reserve(4);
   const bool try_low_rank = options.method != Method::interior_point && options.method != Method::null_space;
   if (complex_form)
-    best = from_complex_low_rank(Cs, options);
+    best = from_complex_low_rank(Cs, options, stages);
   else if (options.method == Method::automatic)
-    best = from_rank_d_or_null_space(Cs, d, options);
+    best = from_rank_d_or_null_space(Cs, d, options, stages);
   else if (options.method == Method::null_space)
-    best = from_null_space(Cs, d, detail::null_space_of(Cs));
+    best = from_null_space(Cs, d, options, stages);
   else if (try_low_rank)
-    best = from_low_rank(Cs, d, options);
+    best = from_low_rank(Cs, d, options, stages);
   if (options.method == Method::interior_point ||
       (options.method == Method::automatic && !is_certified(best, options))) {
     // Complex form: the N × N complex interior point first, the 2N × 2N real one when it does
     // not certify.
     Candidate ip;
-    if (complex_form) ip = from_complex_interior_point(Cs, options, best.Y);
+    if (complex_form) ip = from_complex_interior_point(Cs, options, best.Y, stages);
     if (!complex_form || !is_certified(ip, options))
-      ip = from_interior_point(Cs, d, options, complex_form, try_low_rank && !complex_form ? &best : nullptr);
-    ip.iterations += best.iterations;
+      ip = from_interior_point(Cs, d, options, complex_form, stages, try_low_rank && !complex_form ? &best : nullptr);
     if (options.method == Method::automatic && !is_certified(ip, options)) {
-      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60, options);
+      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60, options, stages);
       if (polished && is_certified(*polished, options)) ip = std::move(*polished);
     }
     // (a staircase outcome without a spectrum has no bound: the interior point's result replaces it)
@@ -631,7 +662,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   int rank = numerical_rank(best.Y);
   // (a low-rank path's rank-d certificate is its own factor's already)
   if (options.method == Method::automatic && (rank > d || (rank == d && best.method == Method::interior_point))) {
-    best = at_unique_rank(Cs, d, std::move(best), options, complex_form);
+    best = at_unique_rank(Cs, d, std::move(best), options, complex_form, stages);
     rank = numerical_rank(best.Y);
   }
 
@@ -646,7 +677,9 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
   r.rel_gap = relative_gap(primal, best.cert.dual_bound);
   r.min_eig_S = best.cert.min_eig;
   r.rank = rank;
-  r.iterations = best.iterations;
+  r.iterations = 0;
+  for (const Stage& stage : stages) r.iterations += stage.iterations;
+  r.stages = std::move(stages);
   classify(r, best, options);  // (without a primal point it reads only that)
   if (best.Y.size() == 0) {      // no primal point (an explicit method that found none): no figures either
     const double nan = std::numeric_limits<double>::quiet_NaN();

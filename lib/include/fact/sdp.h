@@ -63,6 +63,19 @@ struct Options {
   unsigned seed = 1;         // deterministic initialisation
 };
 
+// One method a solve ran, in the order they ran: where its iterations and time went. Automatic
+// mode may run several (rank-d Newton, the interior point, a Newton polish, …); an explicit
+// method runs its own and the steps around it. A solve that returns invalid_input has none.
+struct Stage {
+  std::string method;     // "low_rank", "null_space", "complex_low_rank", "dual_scaling",
+                          // "complex_dual_scaling", "interior_point", "complex_interior_point",
+                          // "newton_polish", "complex_newton" or "unique_rank_newton"
+  int iterations = 0;     // its own: sweeps and Newton steps, or interior-point iterations
+  double time_ms = 0;     // its wall time
+  std::string outcome;    // "certified", "not certified", "handed off" (to a Newton polish) or
+                          // why it stopped
+};
+
 struct Result {
   Status status = Status::invalid_input;
   std::string reason;
@@ -85,8 +98,9 @@ struct Result {
   double eig_gap = 0;        // λ_{d+1}(S) (scaled): > null_tol means nullity ≤ d
   int nullity = 0;           // eigenvalues of scaled S below null_tol
   int rank = 0;              // numerical rank of X
-  int iterations = 0;        // sweeps (low rank) or Newton steps (interior point)
+  int iterations = 0;        // sweeps, Newton steps and interior-point iterations of every stage, summed
   double time_ms = 0;        // wall time of the whole solve, certification included
+  std::vector<Stage> stages;  // the methods it ran, in order
   // When no primal point was found (an explicit method that reports why, status not_certified),
   // Y and Lambda are empty and objective, dual_bound, bound_error, rel_gap, min_eig_S and eig_gap are NaN.
   double scale = 1;          // ‖C‖_F used to scale the problem
