@@ -47,8 +47,14 @@ constexpr double kPotentialWeight = 3.0;
 // Lanczos steps for the dual step length, as the primal–dual corrector's (kLanczosSteps there).
 // The step is kStepFraction of the boundary as Lanczos estimates it (its |λ_min| can be short of
 // the true one, so about that fraction); the Cholesky test is what keeps Z positive definite.
+// Shorter steps than the primal–dual method's 0.95 keep the iterates centred: tight sweeps (5–6
+// seeds, noise 0.02 / 0.03 / 0.05 / 0.1, one process), 0.875 against 0.95: N = 20 / 24 / 48 0.94 /
+// 0.81 / 0.81 of the time, N = 32 / 64 / 100 0.78–0.95, N = 200 0.83, 7–15 % fewer iterations;
+// 0.85 and 0.9 about as good (single sizes 0.70–1.05), 0.8 and 0.7 less so, 0.99 1.5× slower.
+// Fewer Lanczos steps (2–4), whose estimate overshoots and is then shrunk by 0.7, had gained for
+// the same reason (BENCHMARKS.md, session 41).
 constexpr int kDualLanczosSteps = 8;
-constexpr double kStepFraction = 0.95;
+constexpr double kStepFraction = 0.875;
 
 // Every matrix of one iteration, allocated once.
 struct Workspace {
