@@ -42,19 +42,22 @@ using Eigen::VectorXcd;
 using Eigen::VectorXd;
 
 // ρ = kPotentialWeight·N in μ = (z̄ − Σ y)/ρ: DSDP's potential parameter. tight_noisy N = 100:
-// 26 / 22 / 22 / 24 / 30 iterations to a relative gap of 1e-3 with 1.5 / 2 / 3 / 5 / 8 (session 37).
+// 26 / 22 / 22 / 24 / 30 iterations to a relative gap of 1e-3 with 1.5 / 2 / 3 / 5 / 8 (session 37);
+// with the shorter steps below, against 3 (5 seeds, noise 0.02 and 0.05, N = 32 / 64 / 100): 2
+// 1.15–1.32× the time, 4 0.97–1.03, 5 0.96–1.33, 6 and 8 up to 1.11× (session 41).
 constexpr double kPotentialWeight = 3.0;
-// Lanczos steps for the dual step length, as the primal–dual corrector's (kLanczosSteps there).
-// The step is kStepFraction of the boundary as Lanczos estimates it (its |λ_min| can be short of
-// the true one, so about that fraction); the Cholesky test is what keeps Z positive definite.
+// The dual step is kStepFraction of the boundary as Lanczos estimates it (its |λ_min| can be short
+// of the true one, so about that fraction); the Cholesky test is what keeps Z positive definite.
 // Shorter steps than the primal–dual method's 0.95 keep the iterates centred: tight sweeps (5–6
 // seeds, noise 0.02 / 0.03 / 0.05 / 0.1, one process), 0.875 against 0.95: N = 20 / 24 / 48 0.94 /
 // 0.81 / 0.81 of the time, N = 32 / 64 / 100 0.78–0.95, N = 200 0.83, 7–15 % fewer iterations;
 // 0.85 and 0.9 about as good (single sizes 0.70–1.05), 0.8 and 0.7 less so, 0.99 1.5× slower.
-// Fewer Lanczos steps (2–4), whose estimate overshoots and is then shrunk by 0.7, had gained for
-// the same reason (BENCHMARKS.md, session 41).
-constexpr int kDualLanczosSteps = 8;
+// (At 0.95, 2–4 Lanczos steps, whose estimate overshoots and is then shrunk by 0.7, had gained for
+// the same reason.) Lanczos takes kDualLanczosSteps steps, against the primal–dual corrector's 8:
+// 6 took 0.95–0.99 of the time (6 seeds, noise 0.02 / 0.05 / 0.1, N = 32 / 64 / 100), iterations
+// within ±2 %; 5 and 4 gained less or lost (BENCHMARKS.md, session 41).
 constexpr double kStepFraction = 0.875;
+constexpr int kDualLanczosSteps = 6;
 
 // Every matrix of one iteration, allocated once.
 struct Workspace {
