@@ -72,8 +72,8 @@ struct Stage {
                           // "newton_polish", "complex_newton" or "unique_rank_newton"
   int iterations = 0;     // its own: sweeps and Newton steps, or interior-point iterations
   double time_ms = 0;     // its wall time
-  std::string outcome;    // "certified", "not certified", "handed off" (to a Newton polish) or
-                          // why it stopped
+  std::string outcome;    // "certified", "not certified", "converged" (an interior point), "handed
+                          // off" (to a Newton polish) or why it stopped
 };
 
 struct Result {
