@@ -137,7 +137,7 @@ struct Candidate {
 using Clock = std::chrono::steady_clock;
 using Stages = std::vector<Stage>;
 using detail::outcome_of;
-constexpr auto record = detail::record_stage;
+using detail::record_stage;
 
 // The relative gap (detail::relative_gap) of a primal objective and a dual bound.
 double relative_gap(double primal, double dual) { return detail::relative_gap(primal - dual, primal, dual); }
@@ -252,7 +252,7 @@ Candidate from_low_rank(const Eigen::MatrixXd& C, int d, Options o, Stages& stag
   c.primal = primal_objective(C, c.Y, c.cert, d);
   int steps = lr.iterations;
   c = with_one_more_step(C, d, std::move(c), o, steps);
-  record(stages, "low_rank", steps, start, outcome_of(c, o));
+  record_stage(stages, "low_rank", steps, start, outcome_of(c, o));
   return c;
 }
 
@@ -277,7 +277,7 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
     c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", null.dimension,
                              out.steps);
   }
-  record(stages, "null_space", out.steps, start, outcome_of(c, o));
+  record_stage(stages, "null_space", out.steps, start, outcome_of(c, o));
   return c;
 }
 
@@ -332,11 +332,11 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o, Stages& sta
     steps += more;
     if (more > 0) {
       Candidate next =
-          candidate_of(C, detail::complex_outcome(H, std::move(out.Y), 0, false), Method::complex_low_rank);
+          candidate_of(C, detail::complex_outcome(H, std::move(out.Y), steps, false), Method::complex_low_rank);
       if (is_certified(next, o)) c = std::move(next);
     }
   }
-  record(stages, "complex_low_rank", steps, start, outcome_of(c, o));
+  record_stage(stages, "complex_low_rank", steps, start, outcome_of(c, o));
   return c;
 }
 
@@ -347,7 +347,7 @@ Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Ei
   const Clock::time_point start = Clock::now();
   const int steps = detail::complex_newton(H, Y, max_steps, 1e-12);
   Candidate c = candidate_of(C, detail::complex_outcome(H, std::move(Y), steps, false), Method::interior_point);
-  record(stages, "complex_newton", steps, start, outcome_of(c, o));
+  record_stage(stages, "complex_newton", steps, start, outcome_of(c, o));
   return c;
 }
 
@@ -375,13 +375,13 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   if (warm) {  // upper bound: the objective of the primal–dual method's warm start X
     ip = detail::solve_complex_dual_scaling(H, o, kComplexHandoffGap, start.y,
                                             (H.array() * start.X.array().conjugate()).real().sum());
-    record(stages, "complex_dual_scaling", ip.iterations, started, outcome_of(ip));
+    record_stage(stages, "complex_dual_scaling", ip.iterations, started, outcome_of(ip));
   }
   // The primal–dual method to handoff_gap from `from` (X = I and y = −2 without one), into ip.
   const auto primal_dual = [&](double handoff_gap, const detail::ComplexInteriorPointOutcome* from) {
     started = Clock::now();
     ip = detail::solve_complex_interior_point(H, o, handoff_gap, from);
-    record(stages, "complex_interior_point", ip.iterations, started, outcome_of(ip));
+    record_stage(stages, "complex_interior_point", ip.iterations, started, outcome_of(ip));
   };
   // No start, or dual scaling gave up: the primal–dual method, from dual scaling's best primal
   // point and last y when it found one (a strictly feasible pair, closer to the optimum than
@@ -454,7 +454,7 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
   c.Y = std::move(Y);
   certify_factor(C, d, c);
   c = with_one_more_step(C, d, std::move(c), o, steps);
-  record(stages, "newton_polish", steps, start, outcome_of(c, o));
+  record_stage(stages, "newton_polish", steps, start, outcome_of(c, o));
   return c;
 }
 
@@ -481,7 +481,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   const auto primal_dual = [&](double handoff_gap, const detail::InteriorPointOutcome* from) {
     const Clock::time_point start = Clock::now();
     detail::InteriorPointOutcome ip = detail::solve_interior_point(C, d, o, handoff_gap, from);
-    record(stages, "interior_point", ip.iterations, start, outcome_of(ip));
+    record_stage(stages, "interior_point", ip.iterations, start, outcome_of(ip));
     return ip;
   };
   detail::InteriorPointOutcome start;
@@ -554,7 +554,7 @@ Candidate at_unique_rank(const Eigen::MatrixXd& C, int d, Candidate c, const Opt
   polished.Y = std::move(Y);
   certify_factor(C, d, polished, complex_form);
   polished = with_one_more_step(C, d, std::move(polished), o, steps, complex_form);
-  record(stages, "unique_rank_newton", steps, start, outcome_of(polished, o));
+  record_stage(stages, "unique_rank_newton", steps, start, outcome_of(polished, o));
   return is_certified(polished, o) ? polished : c;
 }
 
