@@ -1200,4 +1200,40 @@ TEST(SdpStages, NameTheMethodsASolveRanInOrder) {
   EXPECT_TRUE(invalid.stages.empty());
 }
 
+// The plain form with N + 1 rounds (N = 8: C's null space has dimension N − 1 = 7, room for a
+// feasible X but generically none of rank 2), so the null space goes first. Under noise its Newton
+// step fits at no length (the set is empty): the rank-2 attempt is skipped and the primal–dual
+// interior point starts cold, to the same optimum as the interior point alone. Noise-free, on
+// these two seeds, the zero optimum has rank 2 and no interior: the steps run out, and rank-2
+// Newton still runs and certifies it.
+TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.05, seed);
+    const Result r = fact::sdp::solve(C, 2);
+    ASSERT_TRUE(r.certified()) << r.reason;
+    const std::vector<std::string> methods = methods_of(r);
+    ASSERT_GE(methods.size(), 2u) << "seed " << seed;
+    EXPECT_EQ(methods[0], "null_space");
+    EXPECT_NE(r.stages[0].outcome.find("gave no feasible X"), std::string::npos) << r.stages[0].outcome;
+    EXPECT_EQ(methods[1], "interior_point") << "seed " << seed;
+    EXPECT_EQ(std::count(methods.begin(), methods.end(), "low_rank"), 0) << "seed " << seed;
+    expect_stages_add_up(r);
+    Options interior;
+    interior.method = Method::interior_point;
+    const Result alone = fact::sdp::solve(C, 2, interior);
+    ASSERT_TRUE(alone.certified()) << alone.reason;
+    EXPECT_NEAR(r.objective, alone.objective, 1e-7 * std::abs(alone.objective)) << "seed " << seed;
+  }
+  for (std::uint64_t seed : {7800, 7802}) {
+    const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.0, seed);
+    const Result r = fact::sdp::solve(C, 2);
+    ASSERT_TRUE(r.certified()) << r.reason;
+    ASSERT_EQ(methods_of(r), (std::vector<std::string>{"null_space", "low_rank"})) << "seed " << seed;
+    EXPECT_EQ(r.stages[0].iterations, 10) << r.stages[0].outcome;  // null_space.cpp's kMaxSteps
+    EXPECT_EQ(r.stages[1].outcome, "certified");
+    EXPECT_EQ(r.Y.cols(), 2);
+    EXPECT_NEAR(r.objective, 0.0, 1e-9 * C.norm());
+  }
+}
+
 }  // namespace

@@ -237,6 +237,7 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSp
     const double t = try_step(1.0, ws) ? 1.0 : try_step(0.5, ws) ? 0.5 : 0.0;
     if (t == 0.0) {  // neither step keeps P ≻ 0: taken as no feasible P
       ++out.steps;
+      out.empty = true;
       return false;
     }
     ws.P += t * ws.step;

@@ -130,6 +130,8 @@ struct Candidate {
   double primal = 0;      // ⟨C, Y Yᵀ⟩ (scaled), from primal_objective, set with cert
   Method method = Method::low_rank;
   std::string note;       // why the method stopped, when it did not converge
+  bool null_space_empty = false;  // from_null_space: C's null space had room but no feasible X
+                                  // (detail::NullSpaceOutcome::empty)
 };
 
 // Each method that runs appends its Stage (Result::stages) when it ends (detail::record_stage),
@@ -276,6 +278,7 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
   } else {
     c.note = detail::printed("C's null space (dimension %d) gave no feasible X in %d Newton steps", null.dimension,
                              out.steps);
+    c.null_space_empty = out.empty;
   }
   record_stage(stages, "null_space", out.steps, start, outcome_of(c, o));
   return c;
@@ -290,13 +293,31 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // there; BENCHMARKS.md, session 22). The order is decided on k estimated by pivoted_rank (C's
 // spectrum, which the null space needs, cost a third more than the whole solve of random_lowrank
 // N = 100, which rank-d Newton certifies).
+//
+// When the null space went first and found its set empty (detail::NullSpaceOutcome::empty: one
+// Newton step fitted at neither full nor half length; the plain form with N + 1 rounds at
+// N = 7 … 14 under noise), the rank-d attempt is skipped for d = 2 above kSteepClimbMaxRows, where
+// it could only certify an optimum of rank 2, and the zero candidate (null_space_empty, no factor)
+// goes on: the interior point then starts cold with the primal–dual method (from_interior_point).
+// The skipped attempt ran its 12 steps toward a saddle whose factor only started the interior
+// point, which a cold start reaches in as little time. Sweep (6 seeds; fastest of 3, interleaved),
+// the plain form at noise 1e-4 / 0.002 / 0.01 / 0.05 / 0.1, N = 7 … 14: 0.87–0.98 of the time
+// (noise 0.01, N = 7 / 10: 1.04 / 1.05, where the polish after the cold hand-off did not certify
+// and the interior point resumed); random C of rank N + 1 at N = 7 … 12 0.84–0.91; noise-free and
+// N ≥ 16 unchanged (the steps run out on the rank-2 zero optimum, whose set has no interior, and
+// rank-d Newton still finds it; from N = 16 the null space certifies). Up to 12 rows, where the
+// attempt climbs and certifies optima of rank 3 and 4, skipping it lost (random C of rank 3,
+// N = 5 / 6: 1.11 / 1.07), and so did dual scaling in place of the primal–dual method: 0.72–0.89
+// at noise ≥ 0.03 for N ≤ 9, but 1.03–1.22 at noise 0.002 and 1.07–1.27 at N = 12 and 14, where
+// the optimum is near 0 (BENCHMARKS.md, session 42).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
   const detail::NullSpaceRoom room =
       detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
   const bool null_first = room.feasible && !room.rank_d;
   if (null_first) {
     Candidate zero = from_null_space(C, d, o, stages);
-    if (is_certified(zero, o)) return zero;
+    const bool rank_d_only = d == 2 && C.rows() > kSteepClimbMaxRows;
+    if (is_certified(zero, o) || (zero.null_space_empty && rank_d_only)) return zero;
   }
   Candidate rank_d = from_low_rank(C, d, o, stages, room.rank_d);
   if (is_certified(rank_d, o) || null_first || !room.feasible) return rank_d;
@@ -466,7 +487,8 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
 // off at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
 // stopped when the polish does not certify. Without a warm start, in automatic mode, dual scaling
-// takes the part to the hand-off (dual_scaling_then_interior_point). Dual scaling takes more
+// takes the part to the hand-off (dual_scaling_then_interior_point), except after an empty null
+// space (Candidate::null_space_empty, from_rank_d_or_null_space). Dual scaling takes more
 // iterations to the hand-off (random full rank N = 8 … 100: 12–18 against 8–12) at about half the
 // cost each: 0.66–0.85 of the solve's time at N = 25 … 100, the same statuses and optima. From
 // the rank-d attempt's warm start (n ≤ kWarmStartMaxRows) it gained 10–15 % on random full-rank C
@@ -488,9 +510,11 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   const bool warm_start = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d &&
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
-  detail::InteriorPointOutcome ip = !warm_start && o.method == Method::automatic
-                                        ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
-                                        : primal_dual(handoff, warm_start ? &start : nullptr);
+  // After a null space with room and no feasible X the optimum may be near 0, where dual scaling
+  // crawls (above): the primal–dual method from X = I.
+  const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !(warm && warm->null_space_empty);
+  detail::InteriorPointOutcome ip = cold_dual_scaling ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
+                                                      : primal_dual(handoff, warm_start ? &start : nullptr);
   if (warm_start && !ip.handed_off && !ip.converged) ip = primal_dual(handoff, nullptr);  // the warm start stalled
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
