@@ -1203,9 +1203,9 @@ TEST(SdpStages, NameTheMethodsASolveRanInOrder) {
 // The plain form with N + 1 rounds (N = 8: C's null space has dimension N − 1 = 7, room for a
 // feasible X but generically none of rank 2), so the null space goes first. Under noise its Newton
 // step fits at no length (the set is empty): the rank-2 attempt is skipped and the primal–dual
-// interior point starts cold, to the same optimum as the interior point alone. Noise-free, on
-// these two seeds, the zero optimum has rank 2 and no interior: the steps run out, and rank-2
-// Newton still runs and certifies it.
+// interior point starts cold, to the same optimum as the interior point alone. Noise-free the
+// zero optimum has no interior and the steps run out; rank-2 Newton then still runs. The two
+// noise-free seeds are picked (2 of the 12 seeds 7800 … 7811) as ones where it certifies.
 TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
   for (std::uint64_t seed : {1, 2, 3}) {
     const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.05, seed);
@@ -1215,6 +1215,7 @@ TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
     ASSERT_GE(methods.size(), 2u) << "seed " << seed;
     EXPECT_EQ(methods[0], "null_space");
     EXPECT_NE(r.stages[0].outcome.find("gave no feasible X"), std::string::npos) << r.stages[0].outcome;
+    EXPECT_LT(r.stages[0].iterations, 10) << r.stages[0].outcome;  // a step that fitted at no length
     EXPECT_EQ(methods[1], "interior_point") << "seed " << seed;
     EXPECT_EQ(std::count(methods.begin(), methods.end(), "low_rank"), 0) << "seed " << seed;
     expect_stages_add_up(r);
@@ -1223,6 +1224,18 @@ TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
     const Result alone = fact::sdp::solve(C, 2, interior);
     ASSERT_TRUE(alone.certified()) << alone.reason;
     EXPECT_NEAR(r.objective, alone.objective, 1e-7 * std::abs(alone.objective)) << "seed " << seed;
+  }
+  // Above 48 rows the cold start is dual scaling's, as everywhere there (random C of rank 48,
+  // n = 64: its null space of dimension 16 has room, and no feasible X).
+  for (unsigned seed : {5u, 6u}) {
+    const Eigen::MatrixXd G = gaussian(64, 48, seed);  // C's factor, 64 × 48
+    const Result r = fact::sdp::solve(G * G.transpose(), 2);
+    ASSERT_TRUE(r.certified()) << r.reason;
+    const std::vector<std::string> methods = methods_of(r);
+    ASSERT_GE(methods.size(), 2u) << "seed " << seed;
+    EXPECT_EQ(methods[0], "null_space");
+    EXPECT_LT(r.stages[0].iterations, 10) << r.stages[0].outcome;
+    EXPECT_EQ(methods[1], "dual_scaling") << "seed " << seed;
   }
   for (std::uint64_t seed : {7800, 7802}) {
     const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.0, seed);

@@ -544,11 +544,11 @@ struct NullSpaceOutcome {
   Eigen::MatrixXd Y;        // n × k factor of X = V P Vᵀ, blocks projected to orthonormal rows
   Certificate certificate;  // Λ = 0: S = C, all n eigenvalues
   int steps = 0;            // Newton steps taken
-  // False when none was found: true when a step fitted neither at full nor at half length (the
-  // set of feasible P ≻ 0 taken to be empty, as it generically is when the null space has just
-  // enough room), false when the steps ran out or the Newton system would not factor (a feasible
-  // X of low rank, on the set's boundary, may still exist: the noise-free plain form's zero
-  // optimum of rank 2 ends that way).
+  // When none was found: true when a step fitted neither at full nor at half length (the set of
+  // feasible P ≻ 0 taken to be empty, as it generically is when the null space has just enough
+  // room); false when the steps ran out or the Newton system would not factor (a feasible X of
+  // low rank, on the set's boundary, may still exist: the noise-free plain form's zero optimum of
+  // rank 2 ends that way). False when one was found.
   bool empty = false;
 };
 bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSpaceOutcome& out);

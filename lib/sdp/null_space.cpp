@@ -16,9 +16,9 @@
 // X = V P Vᵀ (n × n), E_a the symmetric d × d basis (E_a = e_x e_yᵀ + e_y e_xᵀ for x < y,
 // e_x e_xᵀ on the diagonal), A*(w) = Vᵀ blkdiag(Σ_a w_ia E_a) V. A full step meets A(P) = b up to
 // rounding, so the first full step that keeps P ≻ 0 ends it; a half step halves the residual. When
-// neither keeps P positive definite the set is taken to be empty (on 480 sweep instances every
-// zero optimum was found with full or half steps, in at most 6 steps; BENCHMARKS.md,
-// session 22), and the interior point runs as before.
+// neither keeps P positive definite the set is taken to be empty (NullSpaceOutcome::empty; on 480
+// sweep instances every zero optimum was found with full or half steps, in at most 6 steps;
+// BENCHMARKS.md, session 22), and the interior point runs.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,7 +35,7 @@ using Eigen::VectorXd;
 // A d × d block, d ≤ 2: on the stack.
 using BlockMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2, 2>;
 
-constexpr int kMaxSteps = 10;            // Newton steps before the set is taken to be empty
+constexpr int kMaxSteps = 10;            // Newton steps before it gives up (the set not taken to be empty)
 constexpr double kFeasibleResidual = 1e-9;  // largest |X_ii − I| entry that ends the steps
 // Added to M's diagonal, relative to its largest diagonal entry, before it is factored: M is
 // singular when the block constraints are dependent on the face (a null space of dimension d that

@@ -294,22 +294,24 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // spectrum, which the null space needs, cost a third more than the whole solve of random_lowrank
 // N = 100, which rank-d Newton certifies).
 //
-// When the null space went first and found its set empty (detail::NullSpaceOutcome::empty: one
+// When the null space went first and found its set empty (detail::NullSpaceOutcome::empty: a
 // Newton step fitted at neither full nor half length; the plain form with N + 1 rounds at
 // N = 7 … 14 under noise), the rank-d attempt is skipped for d = 2 above kSteepClimbMaxRows, where
 // it could only certify an optimum of rank 2, and the zero candidate (null_space_empty, no factor)
-// goes on: the interior point then starts cold with the primal–dual method (from_interior_point).
-// The skipped attempt ran its 12 steps toward a saddle whose factor only started the interior
-// point, which a cold start reaches in as little time. Sweep (6 seeds; fastest of 3, interleaved),
-// the plain form at noise 1e-4 / 0.002 / 0.01 / 0.05 / 0.1, N = 7 … 14: 0.87–0.98 of the time
-// (noise 0.01, N = 7 / 10: 1.04 / 1.05, where the polish after the cold hand-off did not certify
-// and the interior point resumed); random C of rank N + 1 at N = 7 … 12 0.84–0.91; noise-free and
-// N ≥ 16 unchanged (the steps run out on the rank-2 zero optimum, whose set has no interior, and
-// rank-d Newton still finds it; from N = 16 the null space certifies). Up to 12 rows, where the
-// attempt climbs and certifies optima of rank 3 and 4, skipping it lost (random C of rank 3,
-// N = 5 / 6: 1.11 / 1.07), and so did dual scaling in place of the primal–dual method: 0.72–0.89
-// at noise ≥ 0.03 for N ≤ 9, but 1.03–1.22 at noise 0.002 and 1.07–1.27 at N = 12 and 14, where
-// the optimum is near 0 (BENCHMARKS.md, session 42).
+// goes on to the interior point, which starts cold: up to kWarmStartMaxRows rows with the
+// primal–dual method (from_interior_point), above with dual scaling, as without a warm start. The
+// skipped attempt ran its 12 steps toward a saddle whose factor only started the interior point.
+// Sweep (6 seeds; fastest of 3, interleaved), the plain form at noise 1e-4 / 0.002 / 0.01 / 0.05 /
+// 0.1, N = 7 … 14: 0.87–1.00 of the time (noise 0.01, N = 7 / 10: 1.04 / 1.05, where the polish
+// after the cold hand-off did not certify and the interior point resumed); random C of rank N + 1,
+// N = 7 … 12: 0.84–0.91; random C of rank 1.5N at N = 32 / 50 / 64: 0.89 / 0.99 / 0.99. Noise-free
+// the steps mostly run out (the zero optimum of rank 2 has no interior, and rank-d Newton still
+// finds it); the few whose set is found empty take the new path (noise-free sweep, 12 seeds,
+// N = 9 / 10 / 13: 1.00 / 0.99 / 0.97). Up to 12 rows, where the attempt climbs and certifies
+// optima of rank 3 and 4, skipping it lost (random C of rank 3, N = 5 / 6: 1.11 / 1.07); dual
+// scaling in place of the primal–dual method took 0.70–0.91 at noise ≥ 0.03 for N ≤ 9 but
+// 1.03–1.22 at noise 0.002 and 1.07–1.28 at N = 12 and 14, where the optimum is near 0; the
+// primal–dual method above 48 rows took 1.09 at N = 32 (BENCHMARKS.md, session 42).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
   const detail::NullSpaceRoom room =
       detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
@@ -511,10 +513,13 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
   // After a null space with room and no feasible X the optimum may be near 0, where dual scaling
-  // crawls (above): the primal–dual method from X = I.
-  const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !(warm && warm->null_space_empty);
-  detail::InteriorPointOutcome ip = cold_dual_scaling ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
-                                                      : primal_dual(handoff, warm_start ? &start : nullptr);
+  // crawls: up to kWarmStartMaxRows rows the primal–dual method from X = I
+  // (from_rank_d_or_null_space).
+  const bool near_zero = warm && warm->null_space_empty && n <= kWarmStartMaxRows;
+  const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !near_zero;
+  detail::InteriorPointOutcome ip = cold_dual_scaling
+                                        ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
+                                        : primal_dual(handoff, warm_start ? &start : nullptr);
   if (warm_start && !ip.handed_off && !ip.converged) ip = primal_dual(handoff, nullptr);  // the warm start stalled
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
