@@ -193,6 +193,7 @@ std::string fmt_peer_ms(const PeerTiming& p) {
 void print_table_header() {
   std::printf("%4s %-16s %10s %6s %9s %10s %-21s %9s %11s %11s %9s %9s\n", "N", "instance", "ours_ms", "iters",
               "rel_gap", "min_eig_S", "status", "mosek_ms", "sdpa_ms", "csdp_ms", "d_sdpa", "d_csdp");
+  std::fflush(stdout);  // (and the lines above it) before the first progress line on stderr
 }
 
 void print_row(const Row& r) {
@@ -215,6 +216,7 @@ void print_stages(const Row& r) {
             " ms (" + stage.outcome + ")";
   }
   std::printf("%s\n", line.c_str());
+  std::fflush(stdout);  // under its row, before the next progress line on stderr (2>&1 into a pipe)
 }
 
 const char* kCsvHeader = "n,instance,ours_ms,sdpa_ms,csdp_ms,rel_obj_diff_sdpa,rel_obj_diff_csdp,gap,min_eig_S,status";
