@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "common/cli_checks.h"
+#include "csv_fields.h"
 #include "results_file.h"
 #include "stats.h"
 
@@ -158,28 +159,8 @@ std::string runs_header() {
   return h;
 }
 
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream ss(line);
-  for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
-  return fields;
-}
-
-// A whole field as a number ("nan" allowed: runs that did not certify have no time);
-// throws std::invalid_argument naming the column and the value.
-double parse_number(const std::string& field, const std::string& column) {
-  size_t used = 0;
-  double v = NAN;
-  try {
-    v = std::stod(field, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != field.size())
-    throw std::invalid_argument("column " + column + ": '" + field + "' is not a number");
-  return v;
-}
+using fact::bench::parse_number;
+using fact::bench::split_csv_line;
 
 int parse_count(const std::string& field, const std::string& column, int lo, int hi) {
   const double v = parse_number(field, column);

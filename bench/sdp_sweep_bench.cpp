@@ -13,13 +13,13 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "common/cli_checks.h"
+#include "csv_fields.h"
 #include "fact/rotation_cost.h"
 #include "fact/sdp.h"
 #include "instances.h"
@@ -104,26 +104,13 @@ Row solve_row(const std::string& kind, const std::string& noise_text, double noi
 using Key = std::tuple<std::string, std::string, int, int>;  // kind, noise, n, seed
 Key key_of(const Row& r) { return {r.kind, r.noise, r.n, r.seed}; }
 
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream ss(line);
-  std::string field;
-  while (std::getline(ss, field, ',')) fields.push_back(field);
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
-
+// A field as a number, the error naming the file and line (where) and the column.
 double number_field(const std::string& text, const std::string& where, const char* name) {
-  std::size_t used = 0;
-  double value = NAN;
   try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
+    return fact::bench::parse_number(text, name);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(where + ": " + e.what());
   }
-  if (used == 0 || used != text.size())
-    throw std::runtime_error(where + ": field " + name + " is '" + text + "', not a number");
-  return value;
 }
 
 // The rows of baseline files; an instance in several keeps its fastest time.
@@ -137,7 +124,7 @@ std::map<Key, Row> read_baselines(const std::vector<std::string>& paths) {
       throw std::runtime_error("baseline " + path + ": line 1 is '" + line + "', not the header '" + kHeader + "'");
     for (int number = 2; std::getline(in, line); ++number) {
       const std::string where = path + ":" + std::to_string(number);
-      const std::vector<std::string> f = split(line);
+      const std::vector<std::string> f = fact::bench::split_csv_line(line);
       if (f.size() != 9)
         throw std::runtime_error(where + ": " + std::to_string(f.size()) + " fields, expected 9 (" + kHeader + ")");
       Row r;
