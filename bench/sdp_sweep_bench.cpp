@@ -7,6 +7,7 @@
 // per instance) it prints the ratio of the sums per kind and size, and the instances whose
 // status or objective changed. Writes kind,noise,n,seed,ms,iterations,status,objective,methods.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -35,7 +36,9 @@ using Clock = std::chrono::steady_clock;
 // 2N × 3, 2N × (N + 1) or 2N × 2N of standard normals.
 const std::vector<std::string> kKinds = {"plain", "tight", "paper2", "paper3", "rank3", "rank_n1", "fullrank"};
 
-bool is_paper_kind(const std::string& kind) { return kind == "plain" || kind == "tight" || kind == "paper2" || kind == "paper3"; }
+bool is_paper_kind(const std::string& kind) {
+  return kind == "plain" || kind == "tight" || kind == "paper2" || kind == "paper3";
+}
 
 // Seed s of size N is 7000 + 100·N + s (the instances of BENCHMARKS.md's sweeps since session 40).
 std::uint64_t instance_seed(int drones, int s) { return 7000 + 100 * static_cast<std::uint64_t>(drones) + s; }
@@ -203,7 +206,10 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->check(CLI::IsMember(kKinds))
       ->capture_default_str();
-  cli.add_option("--sizes", sizes, "swarm sizes N (C is 2N × 2N)")->delimiter(',')->check(CLI::Range(2, 400))->capture_default_str();
+  cli.add_option("--sizes", sizes, "swarm sizes N (C is 2N × 2N)")
+      ->delimiter(',')
+      ->check(CLI::Range(2, 400))
+      ->capture_default_str();
   cli.add_option("--noise", noises, "noise levels of the paper's kinds (per-axis σ / range)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 1.0))
@@ -212,7 +218,10 @@ int main(int argc, char** argv) {
       ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  cli.add_option("--reps", reps, "solves per median")->check(fact::app::decimal_integer())->check(CLI::Range(1, 100000))->capture_default_str();
+  cli.add_option("--reps", reps, "solves per median")
+      ->check(fact::app::decimal_integer())
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cli.add_option("--rounds", rounds, "medians per instance (the fastest is kept)")
       ->check(fact::app::decimal_integer())
       ->check(CLI::Range(1, 100))
