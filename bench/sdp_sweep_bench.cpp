@@ -67,13 +67,19 @@ struct Row {
 
 const char* kHeader = "kind,noise,n,seed,ms,iterations,status,objective,methods";
 
+// An objective with every digit the comparison reads (std::to_string keeps 6 decimals: 0.000000
+// for the zero optima).
+std::string objective_text(double objective) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.12e", objective);
+  return text;
+}
+
 std::string csv_line(const Row& r) {
   char buf[128];
   std::snprintf(buf, sizeof buf, "%.5f,%d,", r.ms, r.iterations);
-  char objective[40];
-  std::snprintf(objective, sizeof objective, "%.12e", r.objective);
   return r.kind + "," + r.noise + "," + std::to_string(r.n) + "," + std::to_string(r.seed) + "," + buf + r.status + "," +
-         objective + "," + r.methods;
+         objective_text(r.objective) + "," + r.methods;
 }
 
 Row solve_row(const std::string& kind, const std::string& noise_text, double noise, int drones, int s, int reps,
@@ -170,8 +176,8 @@ void print_summary(const std::vector<Row>& rows, const std::map<Key, Row>& base)
     const double scale = std::max(1.0, std::abs(b->second.objective));
     if (b->second.status != r.status || std::abs(b->second.objective - r.objective) > kObjectiveChange * scale)
       changes.push_back(r.kind + " noise " + r.noise + " N = " + std::to_string(r.n) + " seed " + std::to_string(r.seed) +
-                        ": " + b->second.status + " " + std::to_string(b->second.objective) + " -> " + r.status + " " +
-                        std::to_string(r.objective));
+                        ": " + b->second.status + " " + objective_text(b->second.objective) + " -> " + r.status + " " +
+                        objective_text(r.objective));
   }
   std::printf("\n%-9s %6s %4s %9s %6s", "kind", "noise", "N", "sum_ms", "seeds");
   if (!base.empty()) std::printf(" %9s %7s", "base_ms", "ratio");
