@@ -1203,7 +1203,8 @@ TEST(SdpStages, NameTheMethodsASolveRanInOrder) {
 // The plain form with N + 1 rounds (N = 8: C's null space has dimension N − 1 = 7, room for a
 // feasible X but generically none of rank 2), so the null space goes first. Under noise its Newton
 // step fits at no length (the set is empty): the rank-2 attempt is skipped and the primal–dual
-// interior point starts cold, to the same optimum as the interior point alone. Noise-free the
+// interior point starts from near_zero_start, to the same optimum as the interior point alone
+// (from X = I). Noise-free the
 // zero optimum has no interior and the steps run out; rank-2 Newton then still runs. The two
 // noise-free seeds are picked (2 of the 12 seeds 7800 … 7811) as ones where it certifies.
 TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {

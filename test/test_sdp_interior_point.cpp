@@ -222,6 +222,48 @@ TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
   EXPECT_EQ(untouched.X.size(), 0);
 }
 
+// The near-zero start (automatic mode's after a null space with no feasible X) on the noisy
+// plain form, N = 7 and 8, whose optimum is about 1e-4 of ‖C‖: strictly feasible (identity
+// blocks, X ≻ 0, Λ = −s·I with C − Λ ≻ 0), a complementarity μ₀ = ⟨X, C − Λ⟩/n under a tenth of
+// the cold start's, and fewer iterations to the optimum of the run from X = I. A C with a
+// negative eigenvalue beyond s/2 gives no start.
+TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
+  using fact::sdp::detail::kNearZeroShift;
+  for (int drones : {7, 8}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C = scaled_plain_cost(drones, 19);
+    const Eigen::Index n = C.rows();
+    InteriorPointOutcome start;
+    ASSERT_TRUE(fact::sdp::detail::near_zero_start(C, 2, start));
+    EXPECT_EQ(start.iterations, 0);
+    expect_feasible(start);
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
+    const Eigen::MatrixXd expected_lambda = -kNearZeroShift * Eigen::Matrix2d::Identity().replicate(n / 2, 1);
+    EXPECT_EQ(start.lambda, expected_lambda);
+    const Eigen::MatrixXd Z = fact::sdp::detail::certificate_matrix(C, start.lambda, 2);  // C − Λ
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(Z).info(), Eigen::Success);
+    const double mu0 = start.X.cwiseProduct(Z).sum() / static_cast<double>(n);
+    const double cold_mu0 = (C.trace() + static_cast<double>(n) * fact::sdp::detail::cold_start_shift(C)) / static_cast<double>(n);
+    EXPECT_LT(mu0, 0.1 * cold_mu0);
+
+    const Options o;
+    const InteriorPointOutcome cold = solve_interior_point(C, 2, o);
+    const InteriorPointOutcome near = solve_interior_point(C, 2, o, 0.0, &start);
+    ASSERT_TRUE(cold.converged) << cold.reason;
+    ASSERT_TRUE(near.converged) << near.reason;
+    expect_feasible(near);
+    EXPECT_LT(gap_of(C, near), 1e-9);
+    EXPECT_NEAR(C.cwiseProduct(near.X).sum(), C.cwiseProduct(cold.X).sum(), 1e-9);
+    EXPECT_LT(near.iterations, cold.iterations);
+  }
+  const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
+  Eigen::MatrixXd indefinite = C;  // λ_min(C) moved to −s
+  indefinite.diagonal().array() -= Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(C).eigenvalues()[0] + kNearZeroShift;
+  InteriorPointOutcome untouched;
+  EXPECT_FALSE(fact::sdp::detail::near_zero_start(indefinite, 2, untouched));
+  EXPECT_EQ(untouched.X.size(), 0);
+}
+
 // The complex interior point on H (the Hermitian form of complex_form(noisy plain cost), scaled):
 // its X is Hermitian PSD with unit diagonal, S = H − diag(y) is PSD, the gap is below the
 // tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H). N = 80 takes the

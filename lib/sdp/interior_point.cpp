@@ -298,6 +298,22 @@ Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
   return lambda;
 }
 
+bool near_zero_start(const Eigen::MatrixXd& C, int d, InteriorPointOutcome& start) {
+  const Eigen::Index n = C.rows();
+  if (!positive_definite_when_shifted(C, 0.5 * kNearZeroShift)) return false;
+  Eigen::MatrixXd Z = C;  // C + s·I (n × n)
+  Z.diagonal().array() += kNearZeroShift;
+  Eigen::MatrixXd L(n, n), L_inv(n, n);  // Z = L Lᵀ and L⁻¹ (n × n, lower triangular)
+  if (!factor_lower(Z, L)) return false;
+  invert_lower_factor(L, L_inv);
+  gram_of_lower_factor(L_inv, start.X);  // Z⁻¹ = L⁻ᵀ L⁻¹
+  unit_diagonal_blocks(start.X, d);      // D Z⁻¹ D, identity blocks
+  start.lambda = Eigen::MatrixXd::Zero(n, d);
+  for (Eigen::Index i = 0; i < n; i += d) start.lambda.middleRows(i, d).diagonal().setConstant(-kNearZeroShift);
+  start.iterations = 0;
+  return true;
+}
+
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
                     double mix, InteriorPointOutcome& start) {
   const Eigen::Index n = C.rows();

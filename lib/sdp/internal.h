@@ -483,6 +483,17 @@ InteriorPointOutcome dual_scaling_then_interior_point(const Eigen::MatrixXd& C, 
 bool interior_start(const Eigen::MatrixXd& C, int d, const Eigen::MatrixXd& Y, const Eigen::MatrixXd& lambda,
                     double mix, InteriorPointOutcome& start);
 
+// The dual shift s of near_zero_start, for C scaled to ‖C‖_F = 1.
+constexpr double kNearZeroShift = 1e-3;
+// A strictly feasible start for the interior point when the optimum may be near 0 against
+// ‖C‖ (C ⪰ 0 with a null space that holds no feasible X: the plain form under noise): the dual
+// Λ = −s·I (s = kNearZeroShift), whose objective −s·n is already near such an optimum, and the
+// primal X = D (C + s·I)⁻¹ D, D making X's diagonal blocks I (unit_diagonal_blocks): the point
+// the dual start is centred for, rescaled to be feasible. μ starts at about 3e-3 instead of the
+// cold start's 0.1–0.3 (X = I, whose ⟨C, X⟩ = tr C). iterations is 0. False, and start
+// untouched, when C + (s/2)·I fails a Cholesky test (C not positive semidefinite).
+bool near_zero_start(const Eigen::MatrixXd& C, int d, InteriorPointOutcome& start);
+
 // Factors of a PSD X (factor.cpp).
 // The factor of largest rank r ≤ n with X = Y Yᵀ (eigenvalues below tol·max dropped).
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol);

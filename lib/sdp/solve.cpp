@@ -298,8 +298,8 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // Newton step fitted at neither full nor half length; the plain form with N + 1 rounds at
 // N = 7 … 14 under noise), the rank-d attempt is skipped for d = 2 above kSteepClimbMaxRows, where
 // it could only certify an optimum of rank 2, and the zero candidate (null_space_empty, no factor)
-// goes on to the interior point, which starts cold: up to kWarmStartMaxRows rows with the
-// primal–dual method (from_interior_point), above with dual scaling, as without a warm start. The
+// goes on to the interior point without a warm start: up to kWarmStartMaxRows rows the primal–dual
+// method from near_zero_start (from_interior_point), above dual scaling from the cold start. The
 // skipped attempt ran its 12 steps toward a saddle whose factor only started the interior point.
 // Sweep (6 seeds; fastest of 3, interleaved), the plain form at noise 1e-4 / 0.002 / 0.01 / 0.05 /
 // 0.1, N = 7 … 14: 0.87–1.00 of the time (noise 0.01, N = 7 / 10: 1.04 / 1.05, where the polish
@@ -513,14 +513,20 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
                           warm->cert.lambda.size() > 0 &&
                           detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
   // After a null space with room and no feasible X the optimum may be near 0, where dual scaling
-  // crawls: up to kWarmStartMaxRows rows the primal–dual method from X = I
-  // (from_rank_d_or_null_space).
+  // crawls: up to kWarmStartMaxRows rows the primal–dual method (from_rank_d_or_null_space), from
+  // near_zero_start (X = I when C is not PSD). Against X = I (sweep, 6 seeds, the plain form at
+  // noise 0.002 … 0.1 and random C of rank N + 1, N = 5 … 24): 2–4 fewer iterations to the
+  // hand-off, the plain form at N = 7 0.84–0.93 of the time and at N = 8 … 12 0.86–1.08 (which
+  // hand-offs the polish certified changed both ways), rank N + 1 0.94–1.0,
+  // the benchmark's plain_noisy N = 7 / 8 0.91 / 0.86; no status or objective changed
+  // (BENCHMARKS.md, session 43).
   const bool near_zero = warm && warm->null_space_empty && n <= kWarmStartMaxRows;
+  const bool started = warm_start || (near_zero && detail::near_zero_start(C, d, start));
   const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !near_zero;
   detail::InteriorPointOutcome ip = cold_dual_scaling
                                         ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
-                                        : primal_dual(handoff, warm_start ? &start : nullptr);
-  if (warm_start && !ip.handed_off && !ip.converged) ip = primal_dual(handoff, nullptr);  // the warm start stalled
+                                        : primal_dual(handoff, started ? &start : nullptr);
+  if (started && !ip.handed_off && !ip.converged) ip = primal_dual(handoff, nullptr);  // the start stalled
   if (!ip.handed_off) return candidate_of(C, d, ip);
   std::optional<Candidate> polished;
   if (complex_form) {
