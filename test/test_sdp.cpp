@@ -1250,4 +1250,28 @@ TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
   }
 }
 
+// The hand-off's polish drops X's ghost eigenvalues (solve.cpp, kGhostBelow): on the plain form at
+// low noise (N = 8, N + 1 rounds, noise 0.002; seeds of fact-bench-sdp-sweep's instances) X holds,
+// at the hand-off, Ritz values of 1e-5 … 1e-4 beside an optimum of rank 4 or 5 (its smallest
+// eigenvalues 0.1–0.2); counting them, Newton missed the certificate and the interior point
+// resumed. Without them the polish certifies at the optimum's rank, and the result is the
+// interior point's alone.
+TEST(SdpStages, TheHandOffPolishDropsGhostEigenvalues) {
+  for (std::uint64_t seed : {7801, 7803, 7804}) {
+    const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.002, seed);
+    const Result r = fact::sdp::solve(C, 2);
+    ASSERT_TRUE(r.certified()) << r.reason;
+    EXPECT_EQ(methods_of(r), (std::vector<std::string>{"null_space", "interior_point", "newton_polish"}))
+        << "seed " << seed;
+    EXPECT_EQ(r.stages.back().outcome, "certified");
+    Options interior;
+    interior.method = Method::interior_point;
+    const Result alone = fact::sdp::solve(C, 2, interior);
+    ASSERT_TRUE(alone.certified()) << alone.reason;
+    EXPECT_EQ(r.rank, alone.rank) << "seed " << seed;
+    EXPECT_GE(r.rank, 4);
+    EXPECT_NEAR(r.objective, alone.objective, 1e-7 * std::abs(alone.objective)) << "seed " << seed;
+  }
+}
+
 }  // namespace

@@ -264,6 +264,30 @@ TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
   EXPECT_EQ(untouched.X.size(), 0);
 }
 
+// The polish's rank: every value above 1e-6 of the largest, up to the bound; at the hand-off
+// (drop_ghosts) not past a ghost, a value past the d-th both below kGhostBelow of the largest
+// and kGhostDrop times below the one before it. The first spectrum is a hand-off's (plain form,
+// N = 8, noise 0.002, sweep seed 5, whose optimum has rank 4); in the second the small values
+// fall off gradually, as genuine ones of a high-rank optimum can, and are kept.
+TEST(SdpPolishRank, DropsGhostsOnlyBehindASteepFall) {
+  using fact::sdp::detail::polish_rank;
+  const auto values = [](std::initializer_list<double> v) {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
+    std::copy(v.begin(), v.end(), out.data());
+    return out;
+  };
+  const Eigen::VectorXd handed = values({7.9, 7.7, 0.25, 0.17, 6.0e-4, 2.8e-5, 8.5e-6});
+  EXPECT_EQ(polish_rank(handed, 2, 10, false), 7);  // all above 7.9e-6
+  EXPECT_EQ(polish_rank(handed, 2, 10, true), 4);
+  EXPECT_EQ(polish_rank(handed, 2, 5, false), 5);   // the bound
+  const Eigen::VectorXd gradual = values({8.0, 7.0, 1e-2, 3e-3, 6e-4, 2e-4});
+  EXPECT_EQ(polish_rank(gradual, 2, 10, true), 6);
+  const Eigen::VectorXd steep = values({8.0, 7.0, 1e-2, 3e-3, 6e-5, 2e-5});
+  EXPECT_EQ(polish_rank(steep, 2, 10, true), 4);
+  EXPECT_EQ(polish_rank(values({8.0, 2e-5}), 2, 10, true), 2);  // never below d
+  EXPECT_EQ(polish_rank(values({8.0, 7.0, 1e-6}), 2, 10, false), 2);  // the cutoff alone
+}
+
 // The complex interior point on H (the Hermitian form of complex_form(noisy plain cost), scaled):
 // its X is Hermitian PSD with unit diagonal, S = H − diag(y) is PSD, the gap is below the
 // tolerance, and 2·Re tr(H X) is the real interior point's ⟨C, X⟩ on emb(H). N = 80 takes the

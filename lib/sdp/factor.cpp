@@ -1,6 +1,7 @@
 // Factors Y of a positive semidefinite X (Y Yᵀ = X, or Y Yᴴ for complex X): the eigendecomposition
 // that keeps every direction above a tolerance (factor_psd), Cholesky with diagonal pivoting
-// (pivoted_cholesky), and the leading part of X by the two together (leading_factor).
+// (pivoted_cholesky), and the leading part of X by the two together (leading_factor); the rank
+// the Newton polish keeps of such a factor (polish_rank).
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -9,6 +10,16 @@
 #include "internal.h"
 
 namespace fact::sdp::detail {
+
+int polish_rank(const Eigen::VectorXd& values, int d, int max_rank, bool drop_ghosts) {
+  const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
+  const auto ghost = [&](Eigen::Index k) {
+    return drop_ghosts && k >= d && values[k] < kGhostBelow * largest && kGhostDrop * values[k] < values[k - 1];
+  };
+  int rank = 0;
+  while (rank < values.size() && rank < max_rank && values[rank] > 1e-6 * largest && !ghost(rank)) ++rank;
+  return rank;
+}
 
 Eigen::MatrixXd factor_psd(const Eigen::MatrixXd& X, double tol) {
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(X);

@@ -521,6 +521,27 @@ Matrix pivoted_cholesky(const Matrix& Z, double cutoff);
 // drops is X's part below the cutoff, which the interior point's hand-off truncates anyway.
 Eigen::MatrixXd leading_factor(const Eigen::MatrixXd& X, double cutoff);
 
+// At the hand-off X still holds "ghost" eigenvalues that the converged interior point drives to
+// 0, of 1e-6 … 1e-4 of the largest, often above the cutoff; Newton at a rank that counts them
+// crawls toward the rank-deficient optimum, misses the certificate in its steps, and the interior
+// point resumes (5–7 more iterations). polish_rank drops a Ritz value past the d-th that is below
+// kGhostBelow of the largest and kGhostDrop times below the one before it. On the plain form
+// (N + 1 rounds, noise 0.002 … 0.1) and random C of rank N + 1, N = 5 … 24, 6 seeds each, the
+// rank so chosen was the converged optimum's in 161 of the 162 hand-offs, against 90 with the
+// cutoff alone (genuine eigenvalues there went down to 2.7e-4 of the largest, behind drops of up
+// to 1700×), and the polish failed 12 times instead of 38: the plain form at noise 0.002 / 0.01
+// took 0.74–0.95 / 0.80–0.97 of the time at N = 5 … 9 / 6 … 10, at noise 0.05 N = 10 / 12
+// 0.84 / 0.76, rank N + 1 N = 14 0.83, the rest 0.96–1.02; the paper's cost with 2N and 3N
+// rounds, random C of rank 3 and of full rank (N = 5 … 48) 0.90–1.04, polish failures 7 → 2
+// (BENCHMARKS.md, session 43).
+constexpr double kGhostBelow = 1e-4;
+constexpr double kGhostDrop = 10.0;
+// The rank of the Newton polish for a factor whose columns' squared norms are `values` (X's
+// eigenvalues or Ritz values, largest first): the values above 1e-6 of the largest, at most
+// max_rank; with drop_ghosts (the hand-off's factor), up to the first value past the d-th that is
+// below kGhostBelow of the largest and kGhostDrop times below the one before it.
+int polish_rank(const Eigen::VectorXd& values, int d, int max_rank, bool drop_ghosts);
+
 // Largest factor rank the staircase needs: the Pataki bound for N·d(d+1)/2 constraints.
 int pataki_rank(int blocks, int d);
 

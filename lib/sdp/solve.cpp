@@ -440,35 +440,31 @@ Candidate candidate_of(const Eigen::MatrixXd& C, int d, const detail::InteriorPo
 
 // The factor rank and Newton-system size the polish uses for Y (n × r, orthogonal columns
 // largest first, ‖y_k‖² X's eigenvalues or, from leading_factor at the hand-off, its Ritz
-// values): the columns with a value above 1e-6 of the largest, at most the Pataki bound.
+// values): detail::polish_rank, without X's ghost eigenvalues when `ghosts` is set (the hand-off).
 struct PolishSize {
   int rank = 0;
   int unknowns = 0;  // of the Newton system newton_refine factors (detail::newton_unknowns)
 };
-PolishSize polish_size(const Eigen::MatrixXd& Y, int d) {
-  const Eigen::VectorXd eigenvalues = Y.colwise().squaredNorm().transpose();
+PolishSize polish_size(const Eigen::MatrixXd& Y, int d, bool ghosts) {
   const int blocks = static_cast<int>(Y.rows() / d);
-  const int max_rank = detail::pataki_rank(blocks, d);
   PolishSize size;
-  while (size.rank < eigenvalues.size() && size.rank < max_rank &&
-         eigenvalues[size.rank] > 1e-6 * eigenvalues.maxCoeff())
-    ++size.rank;
+  size.rank = detail::polish_rank(Y.colwise().squaredNorm().transpose(), d, detail::pataki_rank(blocks, d), ghosts);
   size.unknowns = detail::newton_unknowns(blocks, d, size.rank);
   return size;
 }
 
-// Riemannian Newton from the interior point's X, at the rank polish_size gives, when the
-// Newton system has at most max_unknowns unknowns, for at most max_steps steps; nullopt when it
-// does not run. The interior point finds the optimal face reliably, but when the optimum is
+// Riemannian Newton from the interior point's X, at the rank polish_size gives (dropping ghost
+// values when `handed_off`: ip.Y is the hand-off's factor), when the Newton system has at most
+// max_unknowns unknowns, for at most max_steps steps; nullopt when it does not run. The interior point finds the optimal face reliably, but when the optimum is
 // small against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
 // quadratically from there. A polished point short only of the gap takes one more step
 // (with_one_more_step): the benchmark's plain_noisy N = 6 handed off at a relative gap of 1e-5,
 // was polished to λ_min(S) = −9e-14 and a gap of 4.1e-9, and the interior point resumed: 27
 // iterations and steps in all, 23 with the one step.
 std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate& ip, int max_unknowns, int max_steps,
-                                const Options& o, Stages& stages) {
+                                bool handed_off, const Options& o, Stages& stages) {
   const Clock::time_point start = Clock::now();
-  const PolishSize size = polish_size(ip.Y, d);
+  const PolishSize size = polish_size(ip.Y, d, handed_off);
   if (size.rank < d || size.unknowns > max_unknowns) return std::nullopt;
   Eigen::MatrixXd Y = ip.Y.leftCols(size.rank);
   if (!detail::project_blocks(Y, d)) return std::nullopt;
@@ -536,7 +532,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
     Candidate handed;  // only the factor: polish certifies its own result
     handed.Y = detail::leading_factor(ip.X, kHandoffFactorCutoff);
     handed.method = Method::interior_point;
-    polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, o, stages);
+    polished = polish(C, d, handed, kMaxPolishSize, kEarlyPolishSteps, true, o, stages);
   }
   if (polished && is_certified(*polished, o)) return *polished;
   return candidate_of(C, d, primal_dual(0.0, &ip));  // resumed where it handed off
@@ -686,7 +682,7 @@ Result solve(const Eigen::MatrixXd& C, int d, const Options& options) {
     if (!complex_form || !is_certified(ip, options))
       ip = from_interior_point(Cs, d, options, complex_form, stages, try_low_rank && !complex_form ? &best : nullptr);
     if (options.method == Method::automatic && !is_certified(ip, options)) {
-      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60, options, stages);
+      std::optional<Candidate> polished = polish(Cs, d, ip, kMaxPolishSize, 60, false, options, stages);
       if (polished && is_certified(*polished, options)) ip = std::move(*polished);
     }
     // (a staircase outcome without a spectrum has no bound: the interior point's result replaces it)
