@@ -1250,9 +1250,9 @@ TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
   }
 }
 
-// The hand-off's polish drops X's ghost eigenvalues (solve.cpp, kGhostBelow): on the plain form at
+// The hand-off's polish drops X's ghost eigenvalues (detail::polish_rank): on the plain form at
 // low noise (N = 8, N + 1 rounds, noise 0.002; seeds of fact-bench-sdp-sweep's instances) X holds,
-// at the hand-off, Ritz values of 1e-5 … 1e-4 beside an optimum of rank 4 or 5 (its smallest
+// at the hand-off, Ritz values of 4e-6 … 8e-5 beside an optimum of rank 4 or 5 (its smallest
 // eigenvalues 0.1–0.2); counting them, Newton missed the certificate and the interior point
 // resumed. Without them the polish certifies at the optimum's rank, and the result is the
 // interior point's alone.

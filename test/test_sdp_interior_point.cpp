@@ -94,6 +94,32 @@ void expect_feasible(const InteriorPointOutcome& ip) {
   EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(ip.X).eigenvalues().minCoeff(), -1e-12);
 }
 
+// A start for the interior point (iterations 0) that is strictly feasible: identity blocks,
+// X ≻ 0 and C − Λ ≻ 0.
+void expect_strictly_feasible_start(const Eigen::MatrixXd& C, const InteriorPointOutcome& start) {
+  EXPECT_EQ(start.iterations, 0);
+  expect_feasible(start);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(fact::sdp::detail::certificate_matrix(C, start.lambda, 2)).info(),
+            Eigen::Success);
+}
+
+// The primal–dual method from `start` converges, feasible, within a relative gap of tol, to the
+// objective of the run from X = I (within tol). Returns the iterations of the two runs, the
+// started one first.
+std::pair<int, int> expect_ends_at_the_cold_optimum(const Eigen::MatrixXd& C, const InteriorPointOutcome& start,
+                                                    double tol) {
+  const Options o;
+  const InteriorPointOutcome cold = solve_interior_point(C, 2, o);
+  const InteriorPointOutcome started = solve_interior_point(C, 2, o, 0.0, &start);
+  EXPECT_TRUE(cold.converged) << cold.reason;
+  EXPECT_TRUE(started.converged) << started.reason;
+  expect_feasible(started);
+  EXPECT_LT(gap_of(C, started), tol);
+  EXPECT_NEAR(C.cwiseProduct(started.X).sum(), C.cwiseProduct(cold.X).sum(), tol);
+  return {started.iterations, cold.iterations};
+}
+
 TEST(SdpInteriorPoint, HandsOffBelowTheGapAndResumesToWhereOneRunEnds) {
   for (int drones : {4, 8}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
@@ -197,23 +223,11 @@ TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
 
   InteriorPointOutcome start;
   ASSERT_TRUE(fact::sdp::detail::interior_start(C, 2, attempt.Y, attempt.certificate.lambda, 0.65, start));
-  EXPECT_EQ(start.iterations, 0);
   const Eigen::MatrixXd expected_X =
       0.35 * attempt.Y * attempt.Y.transpose() + 0.65 * Eigen::MatrixXd::Identity(C.rows(), C.rows());
   EXPECT_LT((start.X - expected_X).cwiseAbs().maxCoeff(), 1e-14);  // the factor, mixed with I
-  expect_feasible(start);
-  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
-  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(fact::sdp::detail::certificate_matrix(C, start.lambda, 2)).info(),
-            Eigen::Success);
-
-  const Options o;
-  const InteriorPointOutcome cold = solve_interior_point(C, 2, o);
-  const InteriorPointOutcome warm = solve_interior_point(C, 2, o, 0.0, &start);
-  ASSERT_TRUE(cold.converged) << cold.reason;
-  ASSERT_TRUE(warm.converged) << warm.reason;
-  expect_feasible(warm);
-  EXPECT_LT(gap_of(C, warm), 1e-7);
-  EXPECT_NEAR(C.cwiseProduct(warm.X).sum(), C.cwiseProduct(cold.X).sum(), 1e-7);
+  expect_strictly_feasible_start(C, start);
+  expect_ends_at_the_cold_optimum(C, start, 1e-7);
 
   InteriorPointOutcome untouched;
   // Λ_ii = 10·I₂: C − Λ + s·I has λ_max(C) − 10 + s < 0 for s ≤ 1 (λ_max(C) ≤ ‖C‖_F = 1)
@@ -235,26 +249,16 @@ TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
     const Eigen::Index n = C.rows();
     InteriorPointOutcome start;
     ASSERT_TRUE(fact::sdp::detail::near_zero_start(C, 2, start));
-    EXPECT_EQ(start.iterations, 0);
-    expect_feasible(start);
-    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(start.X).info(), Eigen::Success);
+    expect_strictly_feasible_start(C, start);
     const Eigen::MatrixXd expected_lambda = -kNearZeroShift * Eigen::Matrix2d::Identity().replicate(n / 2, 1);
     EXPECT_EQ(start.lambda, expected_lambda);
     const Eigen::MatrixXd Z = fact::sdp::detail::certificate_matrix(C, start.lambda, 2);  // C − Λ
-    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(Z).info(), Eigen::Success);
     const double mu0 = start.X.cwiseProduct(Z).sum() / static_cast<double>(n);
-    const double cold_mu0 = (C.trace() + static_cast<double>(n) * fact::sdp::detail::cold_start_shift(C)) / static_cast<double>(n);
+    const double cold_shift = fact::sdp::detail::cold_start_shift(C);
+    const double cold_mu0 = (C.trace() + static_cast<double>(n) * cold_shift) / static_cast<double>(n);
     EXPECT_LT(mu0, 0.1 * cold_mu0);
-
-    const Options o;
-    const InteriorPointOutcome cold = solve_interior_point(C, 2, o);
-    const InteriorPointOutcome near = solve_interior_point(C, 2, o, 0.0, &start);
-    ASSERT_TRUE(cold.converged) << cold.reason;
-    ASSERT_TRUE(near.converged) << near.reason;
-    expect_feasible(near);
-    EXPECT_LT(gap_of(C, near), 1e-9);
-    EXPECT_NEAR(C.cwiseProduct(near.X).sum(), C.cwiseProduct(cold.X).sum(), 1e-9);
-    EXPECT_LT(near.iterations, cold.iterations);
+    const auto [near_iterations, cold_iterations] = expect_ends_at_the_cold_optimum(C, start, 1e-9);
+    EXPECT_LT(near_iterations, cold_iterations);
   }
   const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
   Eigen::MatrixXd indefinite = C;  // λ_min(C) moved to −s

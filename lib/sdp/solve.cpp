@@ -455,7 +455,8 @@ PolishSize polish_size(const Eigen::MatrixXd& Y, int d, bool ghosts) {
 
 // Riemannian Newton from the interior point's X, at the rank polish_size gives (dropping ghost
 // values when `handed_off`: ip.Y is the hand-off's factor), when the Newton system has at most
-// max_unknowns unknowns, for at most max_steps steps; nullopt when it does not run. The interior point finds the optimal face reliably, but when the optimum is
+// max_unknowns unknowns, for at most max_steps steps; nullopt when it does not run. The
+// interior point finds the optimal face reliably, but when the optimum is
 // small against ‖C‖ its last digits are limited by the conditioning of Z⁻¹; Newton converges
 // quadratically from there. A polished point short only of the gap takes one more step
 // (with_one_more_step): the benchmark's plain_noisy N = 6 handed off at a relative gap of 1e-5,
@@ -513,9 +514,8 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   // near_zero_start (X = I when C is not PSD). Against X = I (sweep, 6 seeds, the plain form at
   // noise 0.002 … 0.1 and random C of rank N + 1, N = 5 … 24): 2–4 fewer iterations to the
   // hand-off, the plain form at N = 7 0.84–0.93 of the time and at N = 8 … 12 0.86–1.08 (which
-  // hand-offs the polish certified changed both ways), rank N + 1 0.94–1.0,
-  // the benchmark's plain_noisy N = 7 / 8 0.91 / 0.86; no status or objective changed
-  // (BENCHMARKS.md, session 43).
+  // hand-offs the polish certified changed both ways), rank N + 1 0.94–1.0, the benchmark's
+  // plain_noisy N = 7 / 8 0.91 / 0.86; no status or objective changed (BENCHMARKS.md, session 43).
   const bool near_zero = warm && warm->null_space_empty && n <= kWarmStartMaxRows;
   const bool started = warm_start || (near_zero && detail::near_zero_start(C, d, start));
   const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !near_zero;
