@@ -236,16 +236,21 @@ TEST(SdpInteriorPoint, WarmStartFromARankTwoFactorEndsAtTheColdOptimum) {
   EXPECT_EQ(untouched.X.size(), 0);
 }
 
-// The near-zero start (automatic mode's after a null space with no feasible X) on the noisy
-// plain form, N = 7 and 8, whose optimum is about 1e-4 of ‖C‖: strictly feasible (identity
-// blocks, X ≻ 0, Λ = −s·I with C − Λ ≻ 0), a complementarity μ₀ = ⟨X, C − Λ⟩/n under a tenth of
-// the cold start's, and fewer iterations to the optimum of the run from X = I. A C with a
-// negative eigenvalue beyond s/2 gives no start.
+// The near-zero start on the plain form with N + 1 rounds under noise (N = 7 and 8, the
+// benchmark's plain_noisy), whose optimum is about 1e-4 of ‖C‖ and whose null space holds no
+// feasible X: strictly feasible (identity blocks, X ≻ 0, Λ = −s·I with C − Λ ≻ 0), a
+// complementarity μ₀ = ⟨X, C − Λ⟩/n under a tenth of the cold start's, and fewer iterations to
+// the optimum of the run from X = I. Automatic mode takes it (null_space, then interior_point):
+// its interior point reaches the hand-off (a relative gap of 1e-5, solve.cpp's kHandoffGap) in
+// as many iterations as the run from this start, fewer than from X = I. A C with a negative
+// eigenvalue beyond s/2 gives no start.
 TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
   using fact::sdp::detail::kNearZeroShift;
+  const Options o;
   for (int drones : {7, 8}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
-    const Eigen::MatrixXd C = scaled_plain_cost(drones, 19);
+    const Eigen::MatrixXd C0 = fact::test::plain_cost(drones, drones + 1, 0.05, 2000 + drones);
+    const Eigen::MatrixXd C = C0 / C0.norm();
     const Eigen::Index n = C.rows();
     InteriorPointOutcome start;
     ASSERT_TRUE(fact::sdp::detail::near_zero_start(C, 2, start));
@@ -259,6 +264,16 @@ TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
     EXPECT_LT(mu0, 0.1 * cold_mu0);
     const auto [near_iterations, cold_iterations] = expect_ends_at_the_cold_optimum(C, start, 1e-9);
     EXPECT_LT(near_iterations, cold_iterations);
+
+    const fact::sdp::Result automatic = fact::sdp::solve(C0, 2);
+    ASSERT_GE(automatic.stages.size(), 2u);
+    EXPECT_EQ(automatic.stages[0].method, "null_space");
+    ASSERT_EQ(automatic.stages[1].method, "interior_point");
+    const InteriorPointOutcome handed = solve_interior_point(C, 2, o, 1e-5, &start);
+    const InteriorPointOutcome cold_handed = solve_interior_point(C, 2, o, 1e-5);
+    EXPECT_TRUE(handed.handed_off) << handed.reason;
+    EXPECT_EQ(automatic.stages[1].iterations, handed.iterations);
+    EXPECT_LT(handed.iterations, cold_handed.iterations);
   }
   const Eigen::MatrixXd C = scaled_plain_cost(8, 19);
   Eigen::MatrixXd indefinite = C;  // λ_min(C) moved to −s

@@ -490,8 +490,8 @@ constexpr double kNearZeroShift = 1e-3;
 // Λ = −s·I (s = kNearZeroShift), whose objective −s·n is already near such an optimum, and the
 // primal X = D (C + s·I)⁻¹ D, D making X's diagonal blocks I (unit_diagonal_blocks): the point
 // the dual start is centred for, rescaled to be feasible. μ starts at about 3e-3 instead of the
-// cold start's 0.1–0.3 (X = I, whose ⟨C, X⟩ = tr C). iterations is 0. False, and start
-// untouched, when C + (s/2)·I fails a Cholesky test (C not positive semidefinite).
+// cold start's tr C/n + 1/√n (X = I; 0.32–0.42 on the plain form at N = 5 … 8). iterations is 0.
+// False, and start untouched, when C + (s/2)·I fails a Cholesky test (λ_min(C) ≤ −s/2 or so).
 bool near_zero_start(const Eigen::MatrixXd& C, int d, InteriorPointOutcome& start);
 
 // Factors of a PSD X (factor.cpp).
@@ -529,11 +529,11 @@ Eigen::MatrixXd leading_factor(const Eigen::MatrixXd& X, double cutoff);
 // (N + 1 rounds, noise 0.002 … 0.1) and random C of rank N + 1, N = 5 … 24, 6 seeds each, the
 // rank so chosen was the converged optimum's in 161 of the 162 hand-offs, against 90 with the
 // cutoff alone (genuine eigenvalues there went down to 2.7e-4 of the largest, behind drops of up
-// to 1700×), and the polish failed 12 times instead of 38: the plain form at noise 0.002 / 0.01
-// took 0.74–0.95 / 0.80–0.97 of the time at N = 5 … 9 / 6 … 10, at noise 0.05 N = 10 / 12
-// 0.84 / 0.76, rank N + 1 N = 14 0.83, the rest 0.96–1.02; the paper's cost with 2N and 3N
-// rounds, random C of rank 3 and of full rank (N = 5 … 48) 0.90–1.04, polish failures 7 → 2
-// (BENCHMARKS.md, session 43).
+// to 1700×), and the polish failed 12 times instead of 38. Against near_zero_start alone, the
+// plain form at noise 0.002 / 0.01 took 0.74–0.95 / 0.79–0.97 of the time at N = 5 … 9 / 6 … 10,
+// at noise 0.05 N = 10 / 12 0.84 / 0.76, rank N + 1 N = 14 0.83, the rest 0.96–1.02; the paper's
+// cost with 2N and 3N rounds, random C of rank 3 and of full rank (N = 5 … 48) 0.90–1.04, polish
+// failures 7 → 2 (BENCHMARKS.md, session 43).
 constexpr double kGhostBelow = 1e-4;
 constexpr double kGhostDrop = 10.0;
 // The rank of the Newton polish for a factor whose columns' squared norms are `values` (X's

@@ -487,7 +487,9 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // off at kHandoffGap to a Newton polish of at most kEarlyPolishSteps steps, and resumes where it
 // stopped when the polish does not certify. Without a warm start, in automatic mode, dual scaling
 // takes the part to the hand-off (dual_scaling_then_interior_point), except after an empty null
-// space (Candidate::null_space_empty, from_rank_d_or_null_space). Dual scaling takes more
+// space (Candidate::null_space_empty, from_rank_d_or_null_space) up to kWarmStartMaxRows, where
+// the primal–dual method starts from near_zero_start (X = I when that finds C not PSD, or when
+// the run from it stalls). Dual scaling takes more
 // iterations to the hand-off (random full rank N = 8 … 100: 12–18 against 8–12) at about half the
 // cost each: 0.66–0.85 of the solve's time at N = 25 … 100, the same statuses and optima. From
 // the rank-d attempt's warm start (n ≤ kWarmStartMaxRows) it gained 10–15 % on random full-rank C
@@ -515,7 +517,8 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   // noise 0.002 … 0.1 and random C of rank N + 1, N = 5 … 24): 2–4 fewer iterations to the
   // hand-off, the plain form at N = 7 0.84–0.93 of the time and at N = 8 … 12 0.86–1.08 (which
   // hand-offs the polish certified changed both ways), rank N + 1 0.94–1.0, the benchmark's
-  // plain_noisy N = 7 / 8 0.91 / 0.86; no status or objective changed (BENCHMARKS.md, session 43).
+  // plain_noisy N = 7 / 8 0.1666 → 0.1520 / 0.1453 → 0.1254 ms; no status or objective changed
+  // (BENCHMARKS.md, session 43).
   const bool near_zero = warm && warm->null_space_empty && n <= kWarmStartMaxRows;
   const bool started = warm_start || (near_zero && detail::near_zero_start(C, d, start));
   const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !near_zero;
