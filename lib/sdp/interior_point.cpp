@@ -291,11 +291,19 @@ double cold_start_shift(const Eigen::MatrixXd& C) {
   return positive_definite_when_shifted(C, 0.5 * shift) ? shift : 2.0;
 }
 
-Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
-  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(C.rows(), d);
-  const double shift = cold_start_shift(C);
-  for (Eigen::Index i = 0; i < C.rows(); i += d) lambda.middleRows(i, d).diagonal().setConstant(-shift);
+namespace {
+
+// Λ = −shift·I as d × d blocks stacked (n × d): the dual of the cold and near-zero starts.
+Eigen::MatrixXd shifted_multipliers(Eigen::Index n, int d, double shift) {
+  Eigen::MatrixXd lambda = Eigen::MatrixXd::Zero(n, d);
+  for (Eigen::Index i = 0; i < n; i += d) lambda.middleRows(i, d).diagonal().setConstant(-shift);
   return lambda;
+}
+
+}  // namespace
+
+Eigen::MatrixXd cold_start_lambda(const Eigen::MatrixXd& C, int d) {
+  return shifted_multipliers(C.rows(), d, cold_start_shift(C));
 }
 
 bool near_zero_start(const Eigen::MatrixXd& C, int d, InteriorPointOutcome& start) {
@@ -308,8 +316,7 @@ bool near_zero_start(const Eigen::MatrixXd& C, int d, InteriorPointOutcome& star
   invert_lower_factor(L, L_inv);
   gram_of_lower_factor(L_inv, start.X);  // Z⁻¹ = L⁻ᵀ L⁻¹
   unit_diagonal_blocks(start.X, d);      // D Z⁻¹ D, identity blocks
-  start.lambda = Eigen::MatrixXd::Zero(n, d);
-  for (Eigen::Index i = 0; i < n; i += d) start.lambda.middleRows(i, d).diagonal().setConstant(-kNearZeroShift);
+  start.lambda = shifted_multipliers(n, d, kNearZeroShift);
   start.iterations = 0;
   return true;
 }
