@@ -8,9 +8,13 @@
 namespace fact::bench {
 
 Eigen::MatrixXd synthetic_cost(int drones, double noise, bool tight, std::uint64_t seed) {
+  return synthetic_cost(drones, drones + 1, noise, tight, seed);
+}
+
+Eigen::MatrixXd synthetic_cost(int drones, int rounds, double noise, bool tight, std::uint64_t seed) {
   SyntheticOptions options;
   options.drones = drones;
-  options.rounds = drones + 1;
+  options.rounds = rounds;
   options.noise = noise;
   options.seed = seed;
   const Eigen::MatrixXd q = paper_cost(make_synthetic_rounds(options).sums);  // 2N × 2N

@@ -8,8 +8,10 @@
 
 namespace fact::bench {
 
-// The paper's cost Q (2N × 2N, d = 2) from make_synthetic_rounds with N drones, N + 1
-// rounds and the given noise; with tight = true, its complex (U(1)) form complex_form(Q).
+// The paper's cost Q (2N × 2N, d = 2) from make_synthetic_rounds with N drones, the given
+// rounds and noise; with tight = true, its complex (U(1)) form complex_form(Q).
+Eigen::MatrixXd synthetic_cost(int drones, int rounds, double noise, bool tight, std::uint64_t seed);
+// The same with N + 1 rounds (fact-bench-sdp's instances).
 Eigen::MatrixXd synthetic_cost(int drones, double noise, bool tight, std::uint64_t seed);
 
 // Random PSD C = B Bᵀ, n × n, with B n × rank of i.i.d. standard normals (rank = n: full rank).

@@ -21,7 +21,6 @@
 
 #include "common/cli_checks.h"
 #include "csv_fields.h"
-#include "fact/rotation_cost.h"
 #include "fact/sdp.h"
 #include "instances.h"
 #include "results_file.h"
@@ -48,13 +47,8 @@ Eigen::MatrixXd cost_of(const std::string& kind, int drones, double noise, std::
   if (kind == "rank3") return fact::bench::random_psd(n, 3, seed);
   if (kind == "rank_n1") return fact::bench::random_psd(n, drones + 1, seed);
   if (kind == "fullrank") return fact::bench::random_psd(n, n, seed);
-  fact::SyntheticOptions options;
-  options.drones = drones;
-  options.rounds = kind == "paper2" ? 2 * drones : kind == "paper3" ? 3 * drones : drones + 1;
-  options.noise = noise;
-  options.seed = seed;
-  const Eigen::MatrixXd q = fact::paper_cost(fact::make_synthetic_rounds(options).sums);  // 2N × 2N
-  return kind == "tight" ? fact::sdp::complex_form(q) : q;
+  const int rounds = kind == "paper2" ? 2 * drones : kind == "paper3" ? 3 * drones : drones + 1;
+  return fact::bench::synthetic_cost(drones, rounds, noise, kind == "tight", seed);
 }
 
 // One instance's line of the CSV.
