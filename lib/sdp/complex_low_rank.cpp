@@ -243,9 +243,10 @@ double extend_schur_step(const MatrixXcd& H, const MatrixXcd& Y, double f, doubl
 // step. With saddle_exit it returns early once S has an eigenvalue below −λ (a Cholesky failed
 // at that shift) while ‖grad‖ < λ: the negative curvature then dominates, the point is near a
 // saddle of the SDP at this rank, and converging to it only costs steps (the staircase escapes
-// instead; tight_noisy N = 12: 25 of 39 steps were spent there).
+// instead; tight_noisy N = 12: 25 of 39 steps were spent there). With shift_per_gradient > 0, from
+// the second step on λ is also kept at most shift_per_gradient·‖grad‖ (complex_newton).
 int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit,
-                         double curvature) {
+                         double curvature, double shift_per_gradient) {
   const Eigen::Index N = H.rows();
   SchurWorkspace ws(N, Y.cols());
   ws.HY.noalias() = H * Y;
@@ -258,6 +259,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
     complex_multipliers(ws.HY, Y, ws.mu);
     const double grad_norm = 2.0 * (ws.HY - ws.mu.asDiagonal() * Y).norm();  // ‖2 S Y‖
     if (grad_norm < grad_tol) break;
+    if (shift_per_gradient > 0 && it > 0) lambda = std::max(1e-13, std::min(lambda, shift_per_gradient * grad_norm));
     certificate_matrix(H, ws.mu, ws.S);
     factor_gram(Y, ws.X);
     double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
@@ -284,9 +286,9 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
 }  // namespace
 
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol, bool saddle_exit,
-                   double curvature) {
+                   double curvature, double shift_per_gradient) {
   if (Y.cols() == 1) return rank_one_newton(H, Y, max_iterations, grad_tol);
-  return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit, curvature);
+  return schur_complex_newton(H, Y, max_iterations, grad_tol, saddle_exit, curvature, shift_per_gradient);
 }
 
 namespace {

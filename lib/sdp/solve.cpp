@@ -73,6 +73,17 @@ constexpr int kComplexPolishSteps = 4;
 constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
+// complex_polish's Newton keeps its shift at most kPolishShiftPerGradient·‖grad‖ after the first
+// step (complex_newton's shift_per_gradient). The lower-10×-a-step rule alone held the shift above
+// the gradient for most of the polish: tight_noisy N = 100 handed off at ‖grad‖ 5e-5 and took 5
+// steps at λ = 1e-6, 1e-7, 1e-8, 1e-9, 1e-10 while ‖grad‖ went 1.7e-8, 1.2e-8, 1.2e-9, 3.9e-12; with
+// the cap 3. Sweep (the complex form, N + 1 rounds, noise 0.01 / 0.03 / 0.05 / 0.1, N = 20 … 100,
+// 6 seeds, two runs each side): 2–3.5 % fewer iterations and steps, none with more; time at
+// N = 48 … 100 0.87–1.01, mostly 0.94–0.97, at N = 20 / 32 0.97–1.02; 0.3 and 1 saved fewer steps.
+// At the staircase's levels, whose Newton descends from a saddle, the cap lost (0.1: tight_noisy
+// N = 12 1.17× the time), and on the real Newton (at every call) it moved the iteration totals
+// by −2 … +1 % (BENCHMARKS.md, session 44).
+constexpr double kPolishShiftPerGradient = 0.1;
 // In automatic mode the interior points start from the low-rank path's last factor Y,
 // X = (1 − mix) Y Yᴴ + mix·I with mix = kInteriorStartMix, instead of X = I: the complex one from
 // the staircase's factor, the real one (not on the complex form) from the rank-d attempt's for
@@ -364,11 +375,12 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o, Stages& sta
 }
 
 // Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
-// (complex form only, H = hermitian_of(C)) for at most max_steps steps.
+// (complex form only, H = hermitian_of(C)) for at most max_steps steps, its shift capped by the
+// gradient (kPolishShiftPerGradient).
 Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int max_steps,
                          const Options& o, Stages& stages) {
   const Clock::time_point start = Clock::now();
-  const int steps = detail::complex_newton(H, Y, max_steps, 1e-12);
+  const int steps = detail::complex_newton(H, Y, max_steps, 1e-12, false, 0.0, kPolishShiftPerGradient);
   Candidate c = candidate_of(C, detail::complex_outcome(H, std::move(Y), steps, false), Method::interior_point);
   record_stage(stages, "complex_newton", steps, start, outcome_of(c, o));
   return c;
