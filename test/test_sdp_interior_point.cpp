@@ -283,6 +283,48 @@ TEST(SdpInteriorPoint, NearZeroStartIsCloserAndEndsAtTheColdOptimum) {
   EXPECT_EQ(untouched.X.size(), 0);
 }
 
+// solve.cpp's near-zero window: when the rank-2 attempt ends, uncertified, at an objective in
+// [1e-4, 0.1] of ‖C‖ (the paper's noisy cost, N + 1 rounds, noise 0.05; the benchmark's
+// plain_noisy N = 5 and 6), automatic mode's interior point runs from near_zero_start: its stage
+// takes as many iterations as the run from that start to the hand-off (a relative gap of 1e-5).
+// Below the window (2N rounds at noise 0.01, where the attempt ends within 3e-5 of ‖C‖ of the
+// optimum) it runs from the attempt's factor, which here takes fewer iterations than the near-zero
+// start would.
+TEST(SdpInteriorPoint, AttemptsEndingInTheNearZeroWindowStartFromNearZero) {
+  const Options o;
+  const auto interior_point_stage = [](const fact::sdp::Result& r) {
+    for (const fact::sdp::Stage& stage : r.stages)
+      if (stage.method == "interior_point") return stage.iterations;
+    return -1;
+  };
+  for (int drones : {5, 6}) {
+    SCOPED_TRACE("N = " + std::to_string(drones));
+    const Eigen::MatrixXd C0 = fact::test::plain_cost(drones, drones + 1, 0.05, 2000 + drones);
+    const Eigen::MatrixXd C = C0 / C0.norm();
+    const fact::sdp::Result automatic = fact::sdp::solve(C0, 2);
+    ASSERT_TRUE(automatic.certified()) << automatic.reason;
+    ASSERT_GE(automatic.stages.size(), 2u);
+    EXPECT_EQ(automatic.stages[0].method, "low_rank");
+    EXPECT_EQ(automatic.stages[0].outcome, "not certified");
+    InteriorPointOutcome start;
+    ASSERT_TRUE(fact::sdp::detail::near_zero_start(C, 2, start));
+    const InteriorPointOutcome handed = solve_interior_point(C, 2, o, 1e-5, &start);
+    ASSERT_TRUE(handed.handed_off) << handed.reason;
+    EXPECT_EQ(interior_point_stage(automatic), handed.iterations);
+  }
+  const Eigen::MatrixXd C0 = fact::test::plain_cost(8, 16, 0.01, 7804);
+  const Eigen::MatrixXd C = C0 / C0.norm();
+  const fact::sdp::Result automatic = fact::sdp::solve(C0, 2);
+  ASSERT_TRUE(automatic.certified()) << automatic.reason;
+  InteriorPointOutcome start;
+  ASSERT_TRUE(fact::sdp::detail::near_zero_start(C, 2, start));
+  const InteriorPointOutcome handed = solve_interior_point(C, 2, o, 1e-5, &start);
+  ASSERT_TRUE(handed.handed_off) << handed.reason;
+  const int stage = interior_point_stage(automatic);
+  ASSERT_GT(stage, 0);
+  EXPECT_LT(stage, handed.iterations);
+}
+
 // The polish's rank: every value above 1e-6 of the largest, up to the bound; at the hand-off
 // (drop_ghosts) not past a ghost, a value past the d-th both below kGhostBelow of the largest
 // and kGhostDrop times below the one before it. The first spectrum is a hand-off's (plain form,

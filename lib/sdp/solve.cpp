@@ -93,6 +93,22 @@ constexpr double kPolishShiftPerGradient = 0.1;
 // (BENCHMARKS.md, session 17). Real: 2–4 fewer iterations to the hand-off on plain_noisy
 // N = 5 … 16, mix 0.5 … 0.8 alike (session 19).
 constexpr double kInteriorStartMix = 0.65;
+// When the rank-d attempt that did not certify ended at an objective f (C scaled to ‖C‖_F = 1) in
+// [kNearZeroWindowLow, kNearZeroWindowHigh], the real interior point starts from near_zero_start
+// (Λ = −10⁻³·I, X centred for it) rather than from the attempt's factor. Such an optimum is small
+// against ‖C‖ (the paper's noisy cost: f = 1e-4 … 3e-2), and the attempt's point, off its face,
+// mixed with 0.65·I, starts at a μ₀ 20× the near-zero start's (plain_noisy N = 5: 6.7e-2 against
+// 3e-3). Below the window the attempt has nearly reached the optimum (the paper's cost with 2N
+// rounds at noise 0.01: f ≤ 8e-5, where the near-zero start took up to 2 more iterations); above
+// it the optimum is far from 0, and so is Λ = −10⁻³·I (random full-rank C, f = 0.3 … 1.1: as many
+// iterations or one more). Sweep (8 seeds; the plain cost at noise 0.002 … 0.1, with 2N and 3N
+// rounds, random C of rank N + 1 and full; N = 5 … 24; two runs each side, fastest of 3 medians):
+// the 206 solves whose path changed took 0.95 of the time (geometric mean; 0.65 … 1.23), the
+// plain cost 1.5 % and the paper's cost with 2N / 3N rounds at noise 0.1 3.5 % fewer iterations
+// and steps, no status or objective changed; benchmark plain_noisy N = 5 92 → 82 µs, N = 6 … 16
+// unchanged (BENCHMARKS.md, session 44).
+constexpr double kNearZeroWindowLow = 1e-4;
+constexpr double kNearZeroWindowHigh = 0.1;
 // Automatic mode on a real C with d = 2 and at most this many rows climbs the whole Riemannian
 // staircase (rank 2, 3, … to the Pataki bound) before the interior point, instead of rank 2 alone:
 // at N = 3 and 4 a Newton step on a factor of rank ≤ 4 costs less than an interior-point
@@ -492,7 +508,8 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 
 // The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
 // multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
-// finds no dual shift or the warm run stalls); above, the warm start measured 0 … +20 % slower
+// finds no dual shift or the warm run stalls), or from near_zero_start when the attempt's
+// objective lies in [kNearZeroWindowLow, kNearZeroWindowHigh]; above, the warm start measured 0 … +20 % slower
 // (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
 // near the end and restarted cold; with the hand-off at every size, session 24: random full rank
 // N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
@@ -520,9 +537,14 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
     return ip;
   };
   detail::InteriorPointOutcome start;
-  const bool warm_start = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d &&
-                          warm->cert.lambda.size() > 0 &&
-                          detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
+  const bool has_warm = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d && warm->cert.lambda.size() > 0;
+  // A rank-d attempt whose objective lies in the near-zero window starts the interior point from
+  // near_zero_start instead of its own factor (kNearZeroWindowLow).
+  const bool in_window =
+      has_warm && warm->primal >= kNearZeroWindowLow && warm->primal <= kNearZeroWindowHigh;
+  const bool window_start = in_window && detail::near_zero_start(C, d, start);
+  const bool warm_start = window_start || (has_warm && detail::interior_start(C, d, warm->Y, warm->cert.lambda,
+                                                                              kInteriorStartMix, start));
   // After a null space with room and no feasible X the optimum may be near 0, where dual scaling
   // crawls: up to kWarmStartMaxRows rows the primal–dual method (from_rank_d_or_null_space), from
   // near_zero_start (X = I when C is not PSD). Against X = I (sweep, 6 seeds, the plain form at
