@@ -615,9 +615,9 @@ bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd&
 // order, a little less negative (tight_noisy N = 5 / 6 / 12: −1.1e-3 / −1.0e-4 / −2.8e-5 below,
 // first accepted shifts 1e-3 / 1e-4 / 1e-4): the shifts from 1e-8 up only failed their tests.
 // shift_per_gradient (p ≥ 2; 0 = off): from the second step on the shift is at most
-// shift_per_gradient·‖grad‖, so that near a nondegenerate optimum it falls with the gradient
-// rather than 10× a step (Levenberg–Marquardt with λ of the residual's order converges
-// quadratically); for a polish from an interior point's X, which starts in the optimum's basin.
+// shift_per_gradient·‖grad‖, so that near an optimum it falls with the gradient rather than 10×
+// a step (Levenberg–Marquardt with λ of the residual's order converges quadratically under a
+// local error bound); for a polish from an interior point's X, which starts in the optimum's basin.
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
                    bool saddle_exit = false, double curvature = 0, double shift_per_gradient = 0);
 

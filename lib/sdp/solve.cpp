@@ -74,10 +74,11 @@ constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
 // complex_polish's Newton keeps its shift at most kPolishShiftPerGradient·‖grad‖ after the first
-// step (complex_newton's shift_per_gradient). The lower-10×-a-step rule alone held the shift above
-// the gradient for most of the polish: tight_noisy N = 100 handed off at ‖grad‖ 5e-5 and took 5
-// steps at λ = 1e-6, 1e-7, 1e-8, 1e-9, 1e-10 while ‖grad‖ went 1.7e-8, 1.2e-8, 1.2e-9, 3.9e-12; with
-// the cap 3. Sweep (the complex form, N + 1 rounds, noise 0.01 / 0.03 / 0.05 / 0.1, N = 20 … 100,
+// step (complex_newton's shift_per_gradient; at rank ≥ 2, the Schur-form path). The
+// lower-10×-a-step rule alone kept the shift above 0.1·‖grad‖ from the second step on:
+// tight_noisy N = 100 handed off at ‖grad‖ 5e-5 and took 5 steps at λ = 1e-6, 1e-7, 1e-8, 1e-9,
+// 1e-10 while ‖grad‖ went 1.7e-8, 1.2e-8, 1.2e-9, 3.9e-12; with the cap 4 (3 in a build that
+// rounds differently). Sweep (the complex form, N + 1 rounds, noise 0.01 / 0.03 / 0.05 / 0.1, N = 20 … 100,
 // 6 seeds, two runs each side): 2–3.5 % fewer iterations and steps, none with more; time at
 // N = 48 … 100 0.87–1.01, mostly 0.94–0.97, at N = 20 / 32 0.97–1.02; 0.3 and 1 saved fewer steps.
 // At the staircase's levels, whose Newton descends from a saddle, the cap lost (0.1: tight_noisy
@@ -101,11 +102,13 @@ constexpr double kInteriorStartMix = 0.65;
 // 3e-3). Below the window the attempt has nearly reached the optimum (the paper's cost with 2N
 // rounds at noise 0.01: f ≤ 8e-5, where the near-zero start took up to 2 more iterations); above
 // it the optimum is far from 0, and so is Λ = −10⁻³·I (random full-rank C, f = 0.3 … 1.1: as many
-// iterations or one more). Sweep (8 seeds; the plain cost at noise 0.002 … 0.1, with 2N and 3N
+// iterations or one more; no instance fell between 3e-2 and 0.3, so the upper end is a choice,
+// not a measured edge). Sweep (8 seeds; the plain cost at noise 0.002 … 0.1, with 2N and 3N
 // rounds, random C of rank N + 1 and full; N = 5 … 24; two runs each side, fastest of 3 medians):
 // the 206 solves whose path changed took 0.95 of the time (geometric mean; 0.65 … 1.23), the
 // plain cost 1.5 % and the paper's cost with 2N / 3N rounds at noise 0.1 3.5 % fewer iterations
-// and steps, no status or objective changed; benchmark plain_noisy N = 5 92 → 82 µs, N = 6 … 16
+// and steps (with 3N rounds at noise 0.05: 16 instances fewer, 20 more), no status or objective
+// changed; benchmark plain_noisy N = 5 92 → 82 µs, N = 6 … 16
 // unchanged (BENCHMARKS.md, session 44).
 constexpr double kNearZeroWindowLow = 1e-4;
 constexpr double kNearZeroWindowHigh = 0.1;
@@ -509,7 +512,8 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
 // multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
 // finds no dual shift or the warm run stalls), or from near_zero_start when the attempt's
-// objective lies in [kNearZeroWindowLow, kNearZeroWindowHigh]; above, the warm start measured 0 … +20 % slower
+// objective lies in [kNearZeroWindowLow, kNearZeroWindowHigh] (from the attempt's factor when C is not
+// PSD there); above kWarmStartMaxRows rows the warm start measured 0 … +20 % slower
 // (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
 // near the end and restarted cold; with the hand-off at every size, session 24: random full rank
 // N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
@@ -539,7 +543,8 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   detail::InteriorPointOutcome start;
   const bool has_warm = n <= kWarmStartMaxRows && warm && warm->Y.cols() >= d && warm->cert.lambda.size() > 0;
   // A rank-d attempt whose objective lies in the near-zero window starts the interior point from
-  // near_zero_start instead of its own factor (kNearZeroWindowLow).
+  // near_zero_start instead of its own factor (kNearZeroWindowLow / High; the factor when C is
+  // not PSD, where near_zero_start refuses).
   const bool in_window =
       has_warm && warm->primal >= kNearZeroWindowLow && warm->primal <= kNearZeroWindowHigh;
   const bool window_start = in_window && detail::near_zero_start(C, d, start);
