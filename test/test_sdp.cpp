@@ -776,6 +776,35 @@ TEST(SdpNullSpace, WithoutAFeasiblePointItReportsWhyAndAutomaticGoesOn) {
   }
 }
 
+// The plain form with N + 1 rounds at N = 7: C's null space (dimension 6) has as many unknowns
+// as constraints (21), so one P fits them, generically not positive semidefinite; automatic mode
+// does not try it and starts with the interior point, and ends where the explicit interior point
+// ends. The explicit null-space method confirms it has no feasible X there. At N = 8 (dimension 7,
+// 28 unknowns for 24 constraints) automatic mode still tries the null space first.
+TEST(SdpNullSpace, ARoomForOnePointIsNotTried) {
+  for (std::uint64_t seed : {2007u, 11u, 12u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Eigen::MatrixXd C = fact::test::plain_cost(7, 8, 0.05, seed);
+    const Result automatic = fact::sdp::solve(C, 2);
+    expect_certificate(C, 2, automatic);
+    ASSERT_FALSE(automatic.stages.empty());
+    EXPECT_EQ(automatic.stages[0].method, "interior_point");
+    for (const fact::sdp::Stage& stage : automatic.stages) EXPECT_NE(stage.method, "null_space");
+    Options explicit_method;
+    explicit_method.method = Method::null_space;
+    const Result null = fact::sdp::solve(C, 2, explicit_method);
+    EXPECT_EQ(null.status, Status::not_certified);
+    EXPECT_NE(null.reason.find("null space (dimension 6) gave no feasible X"), std::string::npos) << null.reason;
+    explicit_method.method = Method::interior_point;
+    const Result interior = fact::sdp::solve(C, 2, explicit_method);
+    ASSERT_TRUE(interior.certified()) << interior.reason;
+    EXPECT_NEAR(automatic.objective, interior.objective, 1e-8 * std::abs(interior.objective));
+  }
+  const Result eight = fact::sdp::solve(bench_plain_noisy_cost(8), 2);
+  ASSERT_FALSE(eight.stages.empty());
+  EXPECT_EQ(eight.stages[0].method, "null_space");
+}
+
 // ---------------------------------------------------------------------------------------
 // Bad input.
 

@@ -342,13 +342,33 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // scaling in place of the primal–dual method took 0.70–0.91 at noise ≥ 0.03 for N ≤ 9 but
 // 1.03–1.22 at noise 0.002 and 1.07–1.28 at N = 12 and 14, where the optimum is near 0; the
 // primal–dual method above 48 rows took 1.09 at N = 32 (BENCHMARKS.md, session 42).
+//
+// When the null space would go first and leaves room for one point only (NullSpaceRoom::one_point),
+// it is not tried above kSteepClimbMaxRows (d = 2): the zero candidate is taken as empty (without
+// C's spectrum and Newton's step) and goes on to the interior point as above. The one P that fits
+// the constraints is generically not positive semidefinite: the plain form with N + 1 rounds at
+// N = 7 (k = 6, 21 unknowns for 21 constraints) found no feasible X in 0 of 144 instances (noise
+// 1e-4 … 0.1, 24 seeds each) and random C of rank N + 1 in 0 of 24, against 3 of 168 at N = 8 (4
+// unknowns to spare) and 17 of 168 at N = 9 (9). Sweep (12 seeds, fastest of 3, two runs each
+// side): the plain form at N = 7 and noise 0 / 1e-4 / 0.002 / 0.01 / 0.05 / 0.1 0.84 / 0.91–0.93
+// / 0.94 / 0.94 / 0.94 / 0.93 of the time (noise-free the null space's Newton ran out of steps and
+// the rank-2 attempt ran too: 563 iterations and steps against 309), random C of rank N + 1 0.92;
+// the paper's cost with 2N rounds and N = 8 … 10 unchanged; no status or objective changed
+// (BENCHMARKS.md, session 44).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
-  const detail::NullSpaceRoom room =
-      detail::room_in_null_space(static_cast<int>(C.rows()) - detail::pivoted_rank(C), C.rows(), d);
+  const int k = static_cast<int>(C.rows()) - detail::pivoted_rank(C);  // estimated dim null(C)
+  const detail::NullSpaceRoom room = detail::room_in_null_space(k, C.rows(), d);
   const bool null_first = room.feasible && !room.rank_d;
+  const bool rank_d_only = d == 2 && C.rows() > kSteepClimbMaxRows;
+  if (null_first && room.one_point && rank_d_only) {
+    Candidate zero;
+    zero.method = Method::null_space;
+    zero.note = detail::printed("C's null space (dimension %d) leaves room for one point only: not tried", k);
+    zero.null_space_empty = true;
+    return zero;
+  }
   if (null_first) {
     Candidate zero = from_null_space(C, d, o, stages);
-    const bool rank_d_only = d == 2 && C.rows() > kSteepClimbMaxRows;
     if (is_certified(zero, o) || (zero.null_space_empty && rank_d_only)) return zero;
   }
   Candidate rank_d = from_low_rank(C, d, o, stages, room.rank_d);
