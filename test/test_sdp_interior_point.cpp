@@ -448,7 +448,8 @@ TEST(SdpComplexInteriorPoint, AutomaticModeCapsThePolishShift) {
   for (const auto& [drones, seed] : {std::pair{28, 1u}, std::pair{28, 2u}, std::pair{28, 4u}, std::pair{28, 7u},
                                      std::pair{32, 2u}, std::pair{32, 4u}, std::pair{32, 5u}, std::pair{32, 7u}}) {
     SCOPED_TRACE("N = " + std::to_string(drones) + ", seed " + std::to_string(seed));
-    const fact::sdp::Result r = fact::sdp::solve(fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, seed)), 2);
+    const Eigen::MatrixXd C = fact::sdp::complex_form(fact::test::noisy_plain_cost(drones, seed));
+    const fact::sdp::Result r = fact::sdp::solve(C, 2);
     ASSERT_TRUE(r.certified()) << r.reason;
     int polish = 0;
     for (const fact::sdp::Stage& stage : r.stages)

@@ -78,8 +78,8 @@ constexpr int kComplexHandoffSteps = 10;
 // lower-10×-a-step rule alone kept the shift above 0.1·‖grad‖ from the second step on:
 // tight_noisy N = 100 handed off at ‖grad‖ 5e-5 and took 5 steps at λ = 1e-6, 1e-7, 1e-8, 1e-9,
 // 1e-10 while ‖grad‖ went 1.7e-8, 1.2e-8, 1.2e-9, 3.9e-12; with the cap 4 (3 in a build that
-// rounds differently). Sweep (the complex form, N + 1 rounds, noise 0.01 / 0.03 / 0.05 / 0.1, N = 20 … 100,
-// 6 seeds, two runs each side): 2–3.5 % fewer iterations and steps, none with more; time at
+// rounds differently). Sweep (the complex form, N + 1 rounds, noise 0.01 / 0.03 / 0.05 / 0.1,
+// N = 20 … 100, 6 seeds, two runs each side): 2–3.5 % fewer iterations and steps, none more; time at
 // N = 48 … 100 0.87–1.01, mostly 0.94–0.97, at N = 20 / 32 0.97–1.02; 0.3 and 1 saved fewer steps.
 // At the staircase's levels, whose Newton descends from a saddle, the cap lost (0.1: tight_noisy
 // N = 12 1.17× the time), and on the real Newton (at every call) it moved the iteration totals
@@ -108,8 +108,7 @@ constexpr double kInteriorStartMix = 0.65;
 // the 206 solves whose path changed took 0.95 of the time (geometric mean; 0.65 … 1.23), the
 // plain cost 1.5 % and the paper's cost with 2N / 3N rounds at noise 0.1 3.5 % fewer iterations
 // and steps (with 3N rounds at noise 0.05: 16 instances fewer, 20 more), no status or objective
-// changed; benchmark plain_noisy N = 5 92 → 82 µs, N = 6 … 16
-// unchanged (BENCHMARKS.md, session 44).
+// changed; benchmark plain_noisy N = 5 92 → 82 µs, N = 6 … 16 unchanged (BENCHMARKS.md, session 44).
 constexpr double kNearZeroWindowLow = 1e-4;
 constexpr double kNearZeroWindowHigh = 0.1;
 // Automatic mode on a real C with d = 2 and at most this many rows climbs the whole Riemannian
@@ -347,8 +346,8 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // it is not tried above kSteepClimbMaxRows (d = 2): the zero candidate is taken as empty (without
 // C's spectrum and Newton's step) and goes on to the interior point as above. The one P that fits
 // the constraints is generically not positive semidefinite: the plain form with N + 1 rounds at
-// N = 7 (k = 6, 21 unknowns for 21 constraints) found no feasible X in 0 of 144 instances (noise
-// 1e-4 … 0.1, 24 seeds each) and random C of rank N + 1 in 0 of 24, against 3 of 168 at N = 8 (4
+// N = 7 (k = 6, 21 unknowns for 21 constraints) held a feasible X in none of 144 instances (noise
+// 1e-4 … 0.1, 24 seeds each), random C of rank N + 1 in none of 24, against 3 of 168 at N = 8 (4
 // unknowns to spare) and 17 of 168 at N = 9 (9). Sweep (12 seeds, fastest of 3, two runs each
 // side): the plain form at N = 7 and noise 0 / 1e-4 / 0.002 / 0.01 / 0.05 / 0.1 0.84 / 0.91–0.93
 // / 0.94 / 0.94 / 0.94 / 0.93 of the time (noise-free the null space's Newton ran out of steps and
@@ -363,7 +362,8 @@ Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Optio
   if (null_first && room.one_point && rank_d_only) {
     Candidate zero;
     zero.method = Method::null_space;
-    zero.note = detail::printed("C's null space (dimension %d) leaves room for one point only: not tried", k);
+    zero.note = detail::printed("C's null space (dimension %d) leaves room for one point only: not tried",
+                                k);
     zero.null_space_empty = true;
     return zero;
   }
@@ -532,8 +532,8 @@ std::optional<Candidate> polish(const Eigen::MatrixXd& C, int d, const Candidate
 // The interior point. For n ≤ kWarmStartMaxRows it starts from the rank-d attempt's factor and
 // multipliers when `warm` has them (interior_start with kInteriorStartMix; cold, X = I, when that
 // finds no dual shift or the warm run stalls), or from near_zero_start when the attempt's
-// objective lies in [kNearZeroWindowLow, kNearZeroWindowHigh] (from the attempt's factor when C is not
-// PSD there); above kWarmStartMaxRows rows the warm start measured 0 … +20 % slower
+// objective lies in [kNearZeroWindowLow, kNearZeroWindowHigh] (from the attempt's factor when C
+// is not PSD there); above kWarmStartMaxRows rows the warm start measured 0 … +20 % slower
 // (plain_noisy N = 32, 48; one N = 32 instance, whose optimum is 0, lost positive definiteness
 // near the end and restarted cold; with the hand-off at every size, session 24: random full rank
 // N = 32 … 64 −1 … +5 %, the paper's cost with 2N rounds −8 … −15 %). In automatic mode it hands
