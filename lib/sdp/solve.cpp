@@ -567,9 +567,6 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   // not PSD, where near_zero_start refuses).
   const bool in_window =
       has_warm && warm->primal >= kNearZeroWindowLow && warm->primal <= kNearZeroWindowHigh;
-  const bool window_start = in_window && detail::near_zero_start(C, d, start);
-  const bool warm_start = window_start || (has_warm && detail::interior_start(C, d, warm->Y, warm->cert.lambda,
-                                                                              kInteriorStartMix, start));
   // After a null space with room and no feasible X the optimum may be near 0, where dual scaling
   // crawls: up to kWarmStartMaxRows rows the primal–dual method (from_rank_d_or_null_space), from
   // near_zero_start (X = I when C is not PSD). Against X = I (sweep, 6 seeds, the plain form at
@@ -577,10 +574,12 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   // hand-off, the plain form at N = 7 0.84–0.93 of the time and at N = 8 … 12 0.86–1.08 (which
   // hand-offs the polish certified changed both ways), rank N + 1 0.94–1.0, the benchmark's
   // plain_noisy N = 7 / 8 0.1666 → 0.1520 / 0.1453 → 0.1254 ms; no status or objective changed
-  // (BENCHMARKS.md, session 43).
+  // (BENCHMARKS.md, session 43). Such a zero candidate has no factor, so it is never has_warm.
   const bool near_zero = warm && warm->null_space_empty && n <= kWarmStartMaxRows;
-  const bool started = warm_start || (near_zero && detail::near_zero_start(C, d, start));
-  const bool cold_dual_scaling = !warm_start && o.method == Method::automatic && !near_zero;
+  bool started = (in_window || near_zero) && detail::near_zero_start(C, d, start);
+  if (!started)
+    started = has_warm && detail::interior_start(C, d, warm->Y, warm->cert.lambda, kInteriorStartMix, start);
+  const bool cold_dual_scaling = !started && o.method == Method::automatic && !near_zero;
   detail::InteriorPointOutcome ip = cold_dual_scaling
                                         ? detail::dual_scaling_then_interior_point(C, d, o, handoff, stages)
                                         : primal_dual(handoff, started ? &start : nullptr);
