@@ -1284,9 +1284,10 @@ TEST(SdpStages, AnEmptyNullSpaceGoesStraightToTheInteriorPoint) {
 // at the hand-off, Ritz values of 4e-6 … 8e-5 beside an optimum of rank 4 or 5 (its smallest
 // eigenvalues 0.1–0.2); counting them, Newton missed the certificate and the interior point
 // resumed. Without them the polish certifies at the optimum's rank, and the result is the
-// interior point's alone.
+// interior point's alone. (Seeds whose polish fails with the ghosts counted; 7801 and 7804 until
+// session 45, when the grid's step lengths moved the hand-off's iterate.)
 TEST(SdpStages, TheHandOffPolishDropsGhostEigenvalues) {
-  for (std::uint64_t seed : {7801, 7803, 7804}) {
+  for (std::uint64_t seed : {7795, 7802, 7803}) {
     const Eigen::MatrixXd C = fact::test::plain_cost(8, 9, 0.002, seed);
     const Result r = fact::sdp::solve(C, 2);
     ASSERT_TRUE(r.certified()) << r.reason;

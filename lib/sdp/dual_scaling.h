@@ -4,6 +4,8 @@
 // (the best point's W and Δy) and call `lowers` when a primal point's objective is below z̄.
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "internal.h"
@@ -52,10 +54,14 @@ class DualScalingBound {
     return true;
   }
 
-  // A primal point X(mu) of this objective: true when it lowers z̄, and it is then the best one
-  // (the caller keeps its W and Δy); the wait starts again.
+  // A primal point X(mu) of this objective: true when it lowers z̄ by more than the rounding of
+  // the objective's sum (16ε of |z̄| + |objective|), and it is then the best one (the caller keeps
+  // its W and Δy); the wait starts again. (Where the bound is the optimum, N = 1 with X = I the
+  // only feasible point, the sum came out 1 ulp below it on some dual paths, and a "better" X was
+  // found that is the bound's own.)
   bool lowers(double objective, double mu) {
-    if (!(objective < z_bar_)) return false;
+    const double rounding = 16 * std::numeric_limits<double>::epsilon() * (std::abs(z_bar_) + std::abs(objective));
+    if (!(objective < z_bar_ - rounding)) return false;
     z_bar_ = objective;
     best_mu_ = mu;
     have_primal_ = true;

@@ -105,7 +105,8 @@ struct Workspace {
         dual_steps(n) {}
   Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n)
   SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
-  Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹, Lz⁻¹ (n × n, lower triangular)
+  Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹ (formed when the step lengths read it), Lz⁻¹
+                                               // (n × n, lower triangular)
   Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
   Eigen::MatrixXd M;                           // Schur complement (m × m)
   Eigen::MatrixXd P;                           // scratch n × n product, multiplied by W
@@ -168,7 +169,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
 
   InteriorPointOutcome out;
   Workspace ws(n, m, d);
-  const bool invert_x = n <= kInverseLanczosMaxSize;  // L⁻¹ of X: only the step lengths use it
+  const bool invert_x = step_length_reads_inverse(n);  // L⁻¹ of X: only the step lengths use it
   Eigen::MatrixXd X = Eigen::MatrixXd::Identity(n, n);  // primal, n × n
   Eigen::VectorXd y(m);                                  // dual, m
   if (resume) {

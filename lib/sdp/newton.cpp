@@ -257,7 +257,7 @@ bool schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vect
   const Eigen::Index n = Y.rows();
   ws.shifted = ws.S;
   ws.shifted.diagonal().array() += lambda;
-  if (n <= kExactStepMaxSize) {
+  if (n <= kGridStepMaxSize) {
     if (!cholesky_lower(ws.shifted, ws.L)) return false;
   } else {
     ws.L.swap(ws.shifted);

@@ -1,6 +1,6 @@
 // Step lengths of the interior point (see step_length.h). The kernels below (and spectrum.cpp's
 // tridiagonalisation) work on raw column-major storage or on zero-padded copies whose size is
-// fixed at compile time: at the sizes the exact path serves (n ≤ 48) Eigen's blocked triangular
+// fixed at compile time: at the sizes the grid's tests serve (n ≤ 48) Eigen's blocked triangular
 // solves and tridiagonalisation spend most of their time on overhead, and loops over a column's
 // varying tail on their remainders.
 #include "step_length.h"
@@ -108,7 +108,7 @@ double lowest_from_below(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen
   return bisect_from_below(a, b, x + 1.0 / s1, x + n / s1, relative, absolute);  // converging linearly
 }
 
-// Lanczos steps of the corrector's estimate (n > kExactStepMaxSize). 12 against 24: the same
+// Lanczos steps of the corrector's estimate (n > kGridStepMaxSize). 12 against 24: the same
 // statuses, random full-rank C N = 25 / 32 / 48 / 64 0.81 / 0.84 / 0.90 / 0.91 of the time and the
 // paper's cost with 2N rounds 0.79–0.88 (N = 100 / 150: 0.86–0.93 and 0.53–0.93); 8 was as fast
 // on average but had a 1.27× outlier (BENCHMARKS.md, session 25). The complex interior point takes 8.
@@ -418,68 +418,61 @@ void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
   invert_lower<std::complex<double>>(L, inverse);
 }
 
-StepLength::StepLength(int n)
-    : G_(n, n), B_(n, n), trial_(n, n), trial_factor_(n, n), diagonal_(n), subdiagonal_(std::max(n - 1, 1)), work_(2 * n) {}
+StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
+
+// Tries of the grid: the corrector's ratio down to kFineGridFloor, then kPredictorStepRatio a try
+// (a corrector's step that short is rare: a step under ½ of the way costs 14 tests more on the
+// fine grid than would reach 1e-5 at 0.7), 30 of those.
+constexpr double kFineGridFloor = 0.5;
+constexpr int kCoarseGridTries = 30;
+
+template <class FormTrial>
+double StepLength::on_grid(double tau, FormTrial form_trial) {
+  const bool predictor = tau >= 1.0;
+  int coarse_tries = 0;
+  for (double alpha = 1.0; coarse_tries < kCoarseGridTries;) {
+    form_trial(alpha / tau);
+    // (the corrector keeps P + αΔ itself tested and factored, for take_tested)
+    if (positive_definite() && (predictor || (form_trial(alpha), positive_definite()))) return alpha;
+    const bool fine = !predictor && alpha > kFineGridFloor;
+    alpha *= fine ? kCorrectorStepRatio : kPredictorStepRatio;
+    if (!fine) ++coarse_tries;
+  }
+  return 0.0;
+}
 
 double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                         const Eigen::MatrixXd& delta, double tau) {
-  double alpha;
-  if (!estimated(P.rows(), tau)) {
-    G_.noalias() = inverse * delta;                // L⁻¹ Δ
-    B_.noalias() = G_ * inverse.transpose();       // L⁻¹ Δ L⁻ᵀ
-    alpha = from_min_eigenvalue_of_B(tau);
-  } else {
-    const double lmin =
-        lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
-    alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
-  }
+  if (!delta.allFinite()) return 0.0;
+  const auto form_trial = [&](double a) { trial_ = P + a * delta; };
+  if (P.rows() <= kGridStepMaxSize) return on_grid(tau, form_trial);
+  const double lmin =
+      lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
+  const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   if (tau >= 1.0) return alpha;
-  return shrink_until_positive(alpha, [&](double a) { trial_ = P + a * delta; });
+  return shrink_until_positive(alpha, form_trial);
 }
 
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                                   const Eigen::MatrixXd& D, int d, double tau) {
   const Eigen::Index n = P.rows();
-  double alpha;
-  if (!estimated(n, tau)) {
-    times_block_diagonal(inverse, D, d, G_);  // L⁻¹ Δ, Δ = blkdiag(D)
-    B_.noalias() = G_ * inverse.transpose();  // L⁻¹ Δ L⁻ᵀ
-    alpha = from_min_eigenvalue_of_B(tau);
-  } else {
-    const double lmin = lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
-      w.resize(n);  // Δ u block by block
-      for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
-    });
-    alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
-  }
-  if (tau >= 1.0) return alpha;
-  return shrink_until_positive(alpha, [&](double a) {  // trial_ = P + a Δ, Δ added blockwise
+  if (!D.allFinite()) return 0.0;
+  const auto form_trial = [&](double a) {  // trial_ = P + a Δ, Δ added blockwise
     trial_ = P;
     for (Eigen::Index i = 0; i < n; i += d) trial_.block(i, i, d, d) += a * D.middleRows(i, d).leftCols(d);
+  };
+  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial);
+  const double lmin = lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
+    w.resize(n);  // Δ u block by block
+    for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
   });
-}
-
-// min(1, τ α_max) from λ_min(B): if no eigenvalue lies below −τ the full step fits; otherwise
-// λ_min is bounded from below by Laguerre's iteration on the tridiagonal form (lowest_from_below),
-// so the step never exceeds τ α_max. The bound is within 1e-2 of λ_min (relative) for the
-// predictor (τ = 1: its steps only set the centring σ) and 1e-3 for the corrector, whose step is
-// then at most 0.1 % short of τ α_max. (Until session 28 a geometric bisection on Sturm counts
-// bracketed λ_min to the same widths: about 10 counts of n dependent divisions each.)
-double StepLength::from_min_eigenvalue_of_B(double tau) {
-  tridiagonalize(B_, diagonal_, subdiagonal_, work_);
-  // (a non-finite B, from a non-finite direction: no step; Sturm counts would read NaN as no
-  // eigenvalue below −τ and take the full one)
-  if (!diagonal_.allFinite() || !subdiagonal_.allFinite()) return 0.0;
-  if (eigenvalues_below(diagonal_, subdiagonal_, -tau) == 0) return 1.0;
-  const double start = -1.01 * gershgorin_bounds(diagonal_, subdiagonal_).radius();  // below λ_min
-  double lo = lowest_from_below(diagonal_, subdiagonal_, start, tau >= 1.0 ? 1e-2 : 1e-3, 0.0);
-  if (std::isnan(lo)) lo = start;  // (not expected: the Gershgorin bound is below λ_min)
-  // (lo ≥ −τ only by rounding, the Sturm count above and Laguerre's pivots disagreeing near −τ)
-  return std::min(1.0, tau / -lo);
+  const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
+  if (tau >= 1.0) return alpha;
+  return shrink_until_positive(alpha, form_trial);
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
-  if (A.rows() <= kExactStepMaxSize) return cholesky_lower(A, L);
+  if (A.rows() <= kGridStepMaxSize) return cholesky_lower(A, L);
   L = A;
   return cholesky_in_place(L);
 }

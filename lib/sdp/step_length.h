@@ -2,10 +2,11 @@
 // primal, n × n) or P = Z (the dual slack, n × n) and a symmetric search direction Δ (n × n).
 //
 // With P = L Lᵀ, P + αΔ ≻ 0  ⇔  I + α B ≻ 0  for  B = L⁻¹ Δ L⁻ᵀ (n × n, symmetric), so the
-// boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n, B is
-// reduced to a tridiagonal matrix (Householder) and λ_min is bounded from below by Laguerre's
-// iteration; for large n a Lanczos estimate is used. All work matrices live in a StepLength
-// object that the interior point allocates once.
+// boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n the step is
+// the first point of a geometric grid 1, r, r², … whose P + (α/τ)Δ passes a Cholesky test, which
+// needs neither B nor its spectrum; for large n λ_min(B) is a Lanczos estimate, and the step
+// is confirmed by a Cholesky test. All work matrices live in a StepLength object that the
+// interior point allocates once.
 #pragma once
 
 #include <algorithm>
@@ -14,18 +15,27 @@
 
 namespace fact::sdp::detail {
 
-// Largest n for which the corrector's step length is computed exactly (tridiagonalisation,
-// O(n³)); above it a 12-step Lanczos estimate is verified by Cholesky tests.
-constexpr int kExactStepMaxSize = 48;
-// From this n on, the predictor's step (τ = 1, it only sets the centring σ) is a Lanczos estimate,
-// O(n²) a step (4 steps up to n = 64, 8 above; step_length.cpp). With 8 steps, when introduced:
-// the same iterations (or one fewer) on the benchmark's plain and random instances, and 3 / 10 /
-// 20 / 12 % fewer instructions per solve at n = 24 / 32 / 64 / 128 (plain_noisy; below n = 24 the
-// exact path's plain loops cost less than Eigen's triangular solves then). From 16 since session
-// 39, when Lanczos lost its temporaries (lanczos_lowest): 4 seeds of the plain cost (noise 0.01,
-// 0.05, 0.1) and random C (rank 3, N + 1, full), summed by kind, N = 8 / 10 (n = 16 / 20) 0.90–1.08
-// / 0.81–1.07 of the time, 0.96 / 0.94 on average; at N = 5 … 7 (n = 10 … 14) 0.89–1.11, about even.
-constexpr int kPredictorLanczosMinSize = 16;
+// Largest n for which the step lengths are found on a grid by Cholesky tests (StepLength); above
+// it a Lanczos estimate is confirmed by Cholesky tests. On the grid the predictor's step (τ = 1:
+// it only sets the centring σ) is the first of 1, 0.7, 0.7², … that passes, within a factor
+// kPredictorStepRatio of min(1, α_max); the corrector's the first of 1, 0.95, 0.95², … (down to
+// about ½, then 0.7 a step) for which P + (α/τ)Δ passes, so that α < τ·α_max and, on the fine
+// part, α ≥ kCorrectorStepRatio·min(1, τ·α_max). Until session 45 both were exact up to 48 rows
+// (B formed by two products, tridiagonalised, λ_min bounded by Laguerre's iteration: 1.0 / 1.2 /
+// 1.6 / 1.8 µs a step at n = 10 / 12 / 14 / 16, against 0.11 / 0.17 / 0.21 / 0.25 µs a Cholesky
+// test), the predictor's a 4-step Lanczos estimate from n = 16. With the grid (sweep, 12 seeds,
+// N = 3 … 32; the plain form and the paper's cost with 2N rounds at noise 0.01 and 0.05, random
+// C of rank 3, N + 1 and full): 0.69–0.89 of the time at N = 5 … 24 where the interior point
+// runs (plain 0.69–0.79 at N = 5 … 8), iterations within ±3 %, no status or objective changed;
+// the benchmark's plain_noisy N = 5 / 6 / 7 / 8 0.081 / 0.112 / 0.134 / 0.130 → 0.059 / 0.077 /
+// 0.092 / 0.101 ms (BENCHMARKS.md, session 45). Above 48 rows the tests cost more than they
+// save (the paper's cost and random full rank at N = 32 / 48, n = 64 / 96: 2.3–2.9× the time).
+constexpr int kGridStepMaxSize = 48;
+// Grid ratios, against 0.7 and 0.95 (N = 5 … 7, 24 seeds): the predictor's 0.5 took 1.13–1.3×
+// the iterations, 0.6 / 0.8 / 0.85 1.03 / 1.03 / 1.04 of the time; the corrector's 0.9 2–4 % more
+// iterations, 0.93 / 0.96 / 0.97 the same time to ±2 %.
+constexpr double kPredictorStepRatio = 0.7;
+constexpr double kCorrectorStepRatio = 0.95;
 // Up to this n the Lanczos estimates multiply by an explicit L⁻¹ (two matrix–vector products a
 // step) instead of solving with L: at n = 64 a pair of Eigen's triangular solves takes 1.2 µs,
 // the two products 0.24 µs; at n = 128 2.5 against 2.0 µs, at n = 200 4.2 against 4.9 µs. Above
@@ -36,14 +46,14 @@ constexpr int kInverseLanczosMaxSize = 96;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
 // (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
-// the small sizes of the exact path, where Eigen's LLT spends most of its time on overhead:
+// the small sizes of the grid's tests, where Eigen's LLT spends most of its time on overhead:
 // right-looking below kColumnCholeskyMinSize, left-looking by matrix–vector products from it
 // (n = 24 / 32 / 48 / 64: 0.72 / 1.24 / 3.2 / 6.5 µs right-looking, 0.63 / 1.03 / 2.3 / 4.2 µs
 // left-looking; n = 16: 0.33 against 0.35; BENCHMARKS.md, session 27).
 constexpr Eigen::Index kColumnCholeskyMinSize = 24;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
-// The same by the kernel for A's size: cholesky_lower up to kExactStepMaxSize rows, Eigen's
+// The same by the kernel for A's size: cholesky_lower up to kGridStepMaxSize rows, Eigen's
 // (cholesky_in_place on a copy into L) above. The interior points' and dual scaling's factors
 // of X, Z and their step tests.
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
@@ -95,13 +105,20 @@ double shrink_until_passes(double alpha, Passes passes) {
   return 0.0;
 }
 
+// True when the interior point's step lengths for n × n matrices read L⁻¹ (the Lanczos path's
+// products up to kInverseLanczosMaxSize rows); the grid's Cholesky tests do not.
+inline bool step_length_reads_inverse(Eigen::Index n) { return n > kGridStepMaxSize && n <= kInverseLanczosMaxSize; }
+
 class StepLength {
  public:
   explicit StepLength(int n);
 
-  // min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. L is P's Cholesky factor
-  // (lower triangle), inverse its L⁻¹ (only read for n ≤ kInverseLanczosMaxSize). With τ < 1 the result is confirmed by a Cholesky test
-  // of P + αΔ (α shrunk by 0.7 until it passes; 0 when 30 tries fail).
+  // About min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix, never beyond it: up to
+  // kGridStepMaxSize rows the grid's point (kGridStepMaxSize), above it a Lanczos estimate shrunk
+  // by 0.7 until P + αΔ passes a Cholesky test (τ < 1 only; 0 when 30 tries fail). With τ < 1
+  // P + αΔ has passed a Cholesky test (take_tested hands it over). L is P's Cholesky factor (lower
+  // triangle, read above kInverseLanczosMaxSize), inverse its L⁻¹ (read when
+  // step_length_reads_inverse). 0 for a Δ that is not finite.
   double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
               const Eigen::MatrixXd& delta, double tau);
 
@@ -115,11 +132,9 @@ class StepLength {
   void take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor);
 
  private:
-  double from_min_eigenvalue_of_B(double tau);  // B_ is set: tridiagonalise, bound λ_min from below
-  // True when the step for P (n × n) and τ is a Lanczos estimate rather than the exact bound.
-  static bool estimated(Eigen::Index n, double tau) {
-    return n > kExactStepMaxSize || (tau >= 1.0 && n >= kPredictorLanczosMinSize);
-  }
+  // The grid's step (kGridStepMaxSize): form_trial(a) writes P + aΔ into trial_.
+  template <class FormTrial>
+  double on_grid(double tau, FormTrial form_trial);
   // Shrinks α by 0.7 until P + αΔ, which form_trial(α) writes into trial_, has a Cholesky
   // factorisation (at most 30 tries, then 0).
   template <class FormTrial>
@@ -131,12 +146,9 @@ class StepLength {
   }
   bool positive_definite();  // Cholesky test of trial_
 
-  Eigen::MatrixXd G_;      // L⁻¹ Δ, n × n
-  Eigen::MatrixXd B_;      // L⁻¹ Δ L⁻ᵀ, n × n (the in-place tridiagonalisation, n > 64, overwrites it)
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
   Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
-                                  // blocked kernel above kExactStepMaxSize), n × n
-  Eigen::VectorXd diagonal_, subdiagonal_, work_;  // tridiagonal form of B (n, n − 1) and scratch (2n)
+                                  // blocked kernel above kGridStepMaxSize), n × n
 };
 
 }  // namespace fact::sdp::detail
