@@ -561,9 +561,10 @@ NullSpace null_space_of(const Eigen::MatrixXd& C);
 struct NullSpaceRoom {
   bool feasible = false;  // k(k+1)/2 ≥ N·d(d+1)/2
   bool rank_d = false;    // d·k − d(d−1)/2 ≥ N·d(d+1)/2
-  bool one_point = false;  // feasible with k(k+1)/2 = N·d(d+1)/2: as many unknowns as constraints,
-                           // so generically a single P solves them, positive semidefinite only by
-                           // accident (the plain form with N + 1 rounds at N = 7, k = 6)
+  bool few_points = false;  // feasible with fewer than N unknowns to spare, k(k+1)/2 − N·d(d+1)/2 < N:
+                            // the constraints leave a family of P of dimension below N, rarely one
+                            // positive semidefinite (the plain form with N + 1 rounds at N = 7 and
+                            // 8, k = 6 and 7: 0 and 4 to spare)
 };
 NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d);
 // The rank of C by Cholesky with diagonal pivoting, stopped when the largest remaining diagonal

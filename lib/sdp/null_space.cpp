@@ -171,7 +171,7 @@ NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d) {
   NullSpaceRoom room;
   room.feasible = dim >= d && dim * (dim + 1) / 2 >= constraints;
   room.rank_d = room.feasible && d * dim - d * (d - 1) / 2 >= constraints;
-  room.one_point = room.feasible && dim * (dim + 1) / 2 == constraints;
+  room.few_points = room.feasible && dim * (dim + 1) / 2 - constraints < static_cast<long>(n / d);
   return room;
 }
 

@@ -342,27 +342,31 @@ Candidate from_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Sta
 // 1.03–1.22 at noise 0.002 and 1.07–1.28 at N = 12 and 14, where the optimum is near 0; the
 // primal–dual method above 48 rows took 1.09 at N = 32 (BENCHMARKS.md, session 42).
 //
-// When the null space would go first and leaves room for one point only (NullSpaceRoom::one_point),
-// it is not tried above kSteepClimbMaxRows (d = 2): the zero candidate is taken as empty (without
-// C's spectrum and Newton's step) and goes on to the interior point as above. The one P that fits
-// the constraints is generically not positive semidefinite: the plain form with N + 1 rounds at
-// N = 7 (k = 6, 21 unknowns for 21 constraints) held a feasible X in none of 144 instances (noise
-// 1e-4 … 0.1, 24 seeds each), random C of rank N + 1 in none of 24, against 3 of 168 at N = 8 (4
-// unknowns to spare) and 17 of 168 at N = 9 (9). Sweep (12 seeds, fastest of 3, two runs each
-// side): the plain form at N = 7 and noise 0 / 1e-4 / 0.002 / 0.01 / 0.05 / 0.1 0.84 / 0.91–0.93
-// / 0.94 / 0.94 / 0.94 / 0.93 of the time (noise-free the null space's Newton ran out of steps and
-// the rank-2 attempt ran too: 563 iterations and steps against 309), random C of rank N + 1 0.92;
-// the paper's cost with 2N rounds and N = 8 … 10 unchanged; no status or objective changed
-// (BENCHMARKS.md, session 44).
+// When the null space would go first and leaves room for few points (NullSpaceRoom::few_points:
+// fewer than N unknowns of P to spare over the constraints), it is not tried above
+// kSteepClimbMaxRows (d = 2): the zero candidate is taken as empty (without C's spectrum and
+// Newton's step) and goes on to the interior point as above. With so little room a feasible P
+// is rarely positive semidefinite: the plain form with N + 1 rounds held a feasible X at N = 7
+// (k = 6, 21 unknowns for 21 constraints) in none of 144 instances (noise 1e-4 … 0.1, 24 seeds
+// each), random C of rank N + 1 in none of 24, at N = 8 (4 to spare) in 3 of 168, and at N = 9 (9
+// to spare) in 17 of 168. Sweep (12 seeds, fastest of 3, two runs each side): the plain form at
+// N = 7 and noise 0 / 1e-4 / 0.002 / 0.01 / 0.05 / 0.1 0.84 / 0.91–0.93 / 0.94 / 0.94 / 0.94 /
+// 0.93 of the time (noise-free the null space's Newton ran out of steps and the rank-2 attempt
+// ran too: 563 iterations and steps against 309), random C of rank N + 1 0.92 (session 44, when
+// only N = 7's equal counts were skipped); at N = 8 (24 seeds) the plain form at noise 0 / 1e-4 /
+// 0.002 / 0.01 / 0.05 / 0.1 0.84 / 0.83 / 0.86 / 0.88 / 0.88 / 0.89, random C of rank N + 1 0.89,
+// after the interior point's step lengths became Cholesky tests (measured 0.92–1.02 before them);
+// the few whose null space held a feasible X certify through the interior point instead, at the
+// same optimum; no status changed (BENCHMARKS.md, sessions 44 and 45).
 Candidate from_rank_d_or_null_space(const Eigen::MatrixXd& C, int d, const Options& o, Stages& stages) {
   const int k = static_cast<int>(C.rows()) - detail::pivoted_rank(C);  // estimated dim null(C)
   const detail::NullSpaceRoom room = detail::room_in_null_space(k, C.rows(), d);
   const bool null_first = room.feasible && !room.rank_d;
   const bool rank_d_only = d == 2 && C.rows() > kSteepClimbMaxRows;
-  if (null_first && room.one_point && rank_d_only) {
+  if (null_first && room.few_points && rank_d_only) {
     Candidate zero;
     zero.method = Method::null_space;
-    zero.note = detail::printed("C's null space (dimension %d) leaves room for one point only: not tried",
+    zero.note = detail::printed("C's null space (dimension %d) leaves room for few points only: not tried",
                                 k);
     zero.null_space_empty = true;
     return zero;
