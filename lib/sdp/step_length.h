@@ -25,8 +25,8 @@ namespace fact::sdp::detail {
 // 1.6 / 1.8 µs a step at n = 10 / 12 / 14 / 16, against 0.11 / 0.17 / 0.21 / 0.25 µs a Cholesky
 // test), the predictor's a 4-step Lanczos estimate from n = 16. With the grid (sweep, 12 seeds,
 // N = 3 … 32; the plain form and the paper's cost with 2N rounds at noise 0.01 and 0.05, random
-// C of rank 3, N + 1 and full): 0.69–0.89 of the time at N = 5 … 24 where the interior point
-// runs (plain 0.69–0.79 at N = 5 … 8), iterations within ±3 %, no status or objective changed;
+// C of rank 3, N + 1 and full): 0.69–0.92 of the time at N = 5 … 24 where the interior point
+// runs (plain 0.69–0.79 at N = 5 … 8), iterations −8 … +2 % by row, no status or objective changed;
 // the benchmark's plain_noisy N = 5 / 6 / 7 / 8 0.081 / 0.112 / 0.134 / 0.130 → 0.059 / 0.077 /
 // 0.092 / 0.101 ms (BENCHMARKS.md, session 45). Above 48 rows the tests cost more than they
 // save (the paper's cost and random full rank at N = 32 / 48, n = 64 / 96: 2.3–2.9× the time).
