@@ -420,9 +420,9 @@ void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
 
 StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
 
-// Tries of the grid: the corrector's ratio down to kFineGridFloor, then kPredictorStepRatio a try
-// (a corrector's step that short is rare: a step under ½ of the way costs 14 tests more on the
-// fine grid than would reach 1e-5 at 0.7), 30 of those.
+// The grid's points: the corrector's ratio down to kFineGridFloor (14 points from 1), then
+// kPredictorStepRatio a point, kCoarseGridTries of those (to about 1e-5 of the way). A corrector's
+// step below ½ is rare, and 0.95 a point would take 224 tests to get that far.
 constexpr double kFineGridFloor = 0.5;
 constexpr int kCoarseGridTries = 30;
 
