@@ -844,8 +844,8 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
         for (int i = 0; i < n; i += 2) delta.block(i, i, 2, 2) = blocks.middleRows(i, 2);
       }
       StepLength steps(n);
-      // A predictor's call first (τ = 1: no Cholesky test), as the interior point makes: it must not
-      // leave anything the corrector's hand-over would pick up.
+      // A predictor's call first (τ = 1: its tests, on the grid, are of other trial points), as the
+      // interior point makes: it must not leave anything the corrector's hand-over would pick up.
       const double predicted = block_diagonal ? steps.block_diagonal(P, L, L_inv, blocks, 2, 1.0)
                                               : steps.full(P, L, L_inv, 1.7 * delta, 1.0);
       ASSERT_GT(predicted, 0.0);
@@ -870,7 +870,8 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
 // it by at most one grid point, α ≥ r·τ·α_max with r = kPredictorStepRatio (0.7) for the
 // predictor (τ = 1) and kCorrectorStepRatio (0.95) for the corrector while τ·α_max ≥ ½ (0.7
 // below, where its grid coarsens); for a full Δ, a block-diagonal one, and Δ = −3P, whose
-// B = −3I has one eigenvalue n times. A Δ ⪰ 0 has no boundary (α = 1), and one with a NaN gets 0.
+// B = −3I has one eigenvalue n times. A Δ ⪰ 0 has no boundary (α = 1); a boundary closer than the
+// grid's last point (Δ = −1e5·P, α_max = 1e-5) and a Δ with a NaN get 0.
 TEST(SdpKernels, GridStepLengthsStopWithinOneGridPointOfTheBoundary) {
   using fact::sdp::detail::StepLength;
   std::mt19937 rng(31);
@@ -914,6 +915,7 @@ TEST(SdpKernels, GridStepLengthsStopWithinOneGridPointOfTheBoundary) {
     for (double tau : {1.0, 0.95}) {
       SCOPED_TRACE("n = " + std::to_string(n) + ", τ = " + std::to_string(tau));
       EXPECT_EQ(steps.full(P, L, L_inv, 0.5 * P, tau), 1.0);
+      EXPECT_EQ(steps.full(P, L, L_inv, -1e5 * P, tau), 0.0);
       Eigen::MatrixXd nan_delta = G + G.transpose();
       nan_delta(n - 1, 0) = std::nan("");
       EXPECT_EQ(steps.full(P, L, L_inv, nan_delta, tau), 0.0);

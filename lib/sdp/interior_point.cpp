@@ -100,13 +100,13 @@ void apply_A_to_product(const Eigen::MatrixXd& P, const Eigen::MatrixXd& W, cons
 // n = matrix size, m = number of constraints, d = block size.
 struct Workspace {
   Workspace(int n, int m, int d)
-      : Lx(n, n), Lz(n, n), chol_m(m), Lx_inv(n, n), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
+      : Lx(n, n), Lz(n, n), chol_m(m), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
         dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), block_sums(n, d), rhs(m), dy_aff(m), dy(m), primal_steps(n),
         dual_steps(n) {}
   Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n)
   SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
-  Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹ (formed when the step lengths read it), Lz⁻¹
-                                               // (n × n, lower triangular)
+  Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹ (sized and formed only when the step lengths
+                                               // read it), Lz⁻¹ (n × n, lower triangular)
   Eigen::MatrixXd W;                           // Z⁻¹ = Lz⁻ᵀ Lz⁻¹ (n × n)
   Eigen::MatrixXd M;                           // Schur complement (m × m)
   Eigen::MatrixXd P;                           // scratch n × n product, multiplied by W

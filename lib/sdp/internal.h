@@ -275,8 +275,8 @@ GershgorinBounds gershgorin_bounds(const Eigen::Ref<const Eigen::VectorXd>& a, c
 
 // The smallest eigenvalue of the symmetric tridiagonal matrix with diagonal a (k) and
 // subdiagonal b (k − 1), to within a few kε·‖T‖ (20 000 random, diagonal, zero, badly scaled and
-// repeated-λ_min T up to k = 24: at most 52ε·‖T‖ from Eigen's), by the Laguerre iteration the
-// exact step lengths use (step_length.cpp), T scaled into range first: a few hundred flops for the
+// repeated-λ_min T up to k = 24: at most 52ε·‖T‖ from Eigen's), by Laguerre's iteration
+// (step_length.cpp's lowest_from_below), T scaled into range first: a few hundred flops for the
 // Lanczos matrices here (k ≤ 24), where Eigen's QR iteration with its allocations cost 6 % of a
 // tight_noisy N = 32 solve. Bisection on Sturm counts to 4ε·‖T‖, until session 28, took 0.76 /
 // 1.48 / 5.1 µs at k = 8 / 12 / 24, this 0.28 / 0.38 / 0.99 µs.
@@ -561,10 +561,10 @@ NullSpace null_space_of(const Eigen::MatrixXd& C);
 struct NullSpaceRoom {
   bool feasible = false;  // k(k+1)/2 ≥ N·d(d+1)/2
   bool rank_d = false;    // d·k − d(d−1)/2 ≥ N·d(d+1)/2
-  bool few_points = false;  // feasible with fewer than N unknowns to spare, k(k+1)/2 − N·d(d+1)/2 < N:
-                            // the constraints leave a family of P of dimension below N, rarely one
-                            // positive semidefinite (the plain form with N + 1 rounds at N = 7 and
-                            // 8, k = 6 and 7: 0 and 4 to spare)
+  bool few_points = false;  // feasible with fewer than N unknowns to spare, k(k+1)/2 − N·d(d+1)/2 < N,
+                            // at any N: the constraints leave a family of P of dimension below N,
+                            // rarely one positive semidefinite (the plain form with N + 1 rounds at
+                            // N = 7 and 8, k = 6 and 7: 0 and 4 to spare)
 };
 NullSpaceRoom room_in_null_space(int k, Eigen::Index n, int d);
 // The rank of C by Cholesky with diagonal pivoting, stopped when the largest remaining diagonal

@@ -1,5 +1,5 @@
 // Eigenvalues, for the certificates (S = C − Λ, real n × n, or S = H − diag μ, complex N × N) and
-// the exact step lengths (step_length.cpp): Householder reduction to a real symmetric tridiagonal
+// the Lanczos matrices' lowest eigenvalue (step_length.cpp's estimates): Householder reduction to a real symmetric tridiagonal
 // matrix, then the root-free QL iteration of Pal, Walker and Kahan (EISPACK's tqlrat) on the
 // squares of its off-diagonal. Eigen's SelfAdjointEigenSolver spent 1–3 µs of an 8-drone solve's
 // 14 µs in its tridiagonal QR, whose Givens rotations take a square root each (BENCHMARKS.md,
@@ -164,8 +164,9 @@ void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& dia
   diagonal[n - 1] = A(n - 1, n - 1);
 }
 
-// Largest n reduced by tridiagonalize_padded: the exact step lengths' matrices (n ≤ 48) and the
-// certificates' up to 64 rows (random low rank N = 25 … 32: 0.93–0.94 of the time; session 28).
+// Largest n reduced by tridiagonalize_padded: the certificates' matrices up to 64 rows (random low
+// rank N = 25 … 32: 0.93–0.94 of the time; session 28, when the exact step lengths' matrices, n ≤
+// 48, were reduced here too).
 constexpr Eigen::Index kPaddedMaxSize = 64;
 
 // tridiagonalize_padded at the smallest padded size that holds A (n × n, 3 ≤ n ≤ kPaddedMaxSize).

@@ -1,8 +1,9 @@
-// Step lengths of the interior point (see step_length.h). The kernels below (and spectrum.cpp's
-// tridiagonalisation) work on raw column-major storage or on zero-padded copies whose size is
-// fixed at compile time: at the sizes the grid's tests serve (n ≤ 48) Eigen's blocked triangular
-// solves and tridiagonalisation spend most of their time on overhead, and loops over a column's
-// varying tail on their remainders.
+// Step lengths of the interior point (see step_length.h), the factor kernels they and the interior
+// points use, and the lowest eigenvalue of a tridiagonal matrix (the Lanczos estimates'). The
+// kernels work on raw column-major storage or on zero-padded copies whose size is fixed at compile
+// time: at the small sizes (the grid's tests, n ≤ 48) Eigen's blocked Cholesky and triangular
+// solves spend most of their time on overhead, and loops over a column's varying tail on their
+// remainders.
 #include "step_length.h"
 
 #include "complex_product.h"
@@ -421,8 +422,9 @@ void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
 StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
 
 // The grid's points: the corrector's ratio down to kFineGridFloor (14 points from 1), then
-// kPredictorStepRatio a point, kCoarseGridTries of those (to about 1e-5 of the way). A corrector's
-// step below ½ is rare, and 0.95 a point would take 224 tests to get that far.
+// kPredictorStepRatio a point, kCoarseGridTries of those (the predictor's last point 0.7²⁹ ≈ 3.2e-5,
+// the corrector's 0.488·0.7²⁹ ≈ 1.6e-5: a boundary closer than that gives 0, a stalled step). A
+// corrector's step below ½ is rare, and 0.95 a point would take 224 tests to reach 1e-5.
 constexpr double kFineGridFloor = 0.5;
 constexpr int kCoarseGridTries = 30;
 

@@ -4,8 +4,8 @@
 // With P = L Lᵀ, P + αΔ ≻ 0  ⇔  I + α B ≻ 0  for  B = L⁻¹ Δ L⁻ᵀ (n × n, symmetric), so the
 // boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n the step is
 // the first point of a geometric grid 1, r, r², … whose P + (α/τ)Δ passes a Cholesky test, which
-// needs neither B nor its spectrum; for large n λ_min(B) is a Lanczos estimate, and the step
-// is confirmed by a Cholesky test. All work matrices live in a StepLength object that the
+// needs neither B nor its spectrum; for large n λ_min(B) is a Lanczos estimate, and the
+// corrector's step is confirmed by a Cholesky test. All work matrices live in a StepLength object that the
 // interior point allocates once.
 #pragma once
 
@@ -113,11 +113,13 @@ class StepLength {
  public:
   explicit StepLength(int n);
 
-  // About min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix, never beyond it: up to
-  // kGridStepMaxSize rows the grid's point (kGridStepMaxSize), above it a Lanczos estimate shrunk
-  // by 0.7 until P + αΔ passes a Cholesky test (τ < 1 only; 0 when 30 tries fail). With τ < 1
-  // P + αΔ has passed a Cholesky test (take_tested hands it over). L is P's Cholesky factor (lower
-  // triangle, read above kInverseLanczosMaxSize), inverse its L⁻¹ (read when
+  // About min(1, τ·α_max) for P + αΔ, Δ a full symmetric n × n matrix. Up to kGridStepMaxSize rows
+  // the grid's point (kGridStepMaxSize), never beyond τ·α_max, and 0 when the boundary is closer
+  // than the grid's last point (on_grid). Above, a Lanczos estimate, which can lie beyond the
+  // boundary (its Ritz value lies above λ_min): the predictor's is taken as it is, the corrector's
+  // shrunk by 0.7 until P + αΔ passes a Cholesky test (so α < α_max only; 0 when 30 tries fail).
+  // With τ < 1 P + αΔ has passed a Cholesky test (take_tested hands it over). L is P's Cholesky
+  // factor (lower triangle, read above kInverseLanczosMaxSize), inverse its L⁻¹ (read when
   // step_length_reads_inverse). 0 for a Δ that is not finite.
   double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
               const Eigen::MatrixXd& delta, double tau);
