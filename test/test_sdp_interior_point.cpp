@@ -1316,12 +1316,8 @@ TEST(SdpNewton, SchurFormTakesTheTangentBasisStep) {
       Eigen::MatrixXd start = optimum + size * fact::test::gaussian_matrix<Eigen::MatrixXd>(optimum.rows(), rank, rng, gauss);
       ASSERT_TRUE(fact::sdp::detail::project_blocks(start, c.d));
       if (size < 1e-4) {  // the premise of the same step: S(start) + 0.5e-8·I ≻ 0
-        Eigen::MatrixXd S = c.C;  // C − blkdiag(Λ), Λ_ii = sym((C Y)_i Y_iᵀ), n × n
-        const Eigen::MatrixXd CY = c.C * start;
-        for (Eigen::Index i = 0; i < S.rows(); i += c.d) {
-          const Eigen::MatrixXd block = CY.middleRows(i, c.d) * start.middleRows(i, c.d).transpose();  // d × d
-          S.block(i, i, c.d, c.d) -= 0.5 * (block + block.transpose());
-        }
+        const Eigen::MatrixXd S = fact::sdp::detail::certificate_matrix(
+            c.C, fact::sdp::detail::lambda_from_factor(c.C, start, c.d), c.d);  // C − blkdiag(Λ(Y)), n × n
         ASSERT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S).eigenvalues()[0], -0.5e-8);
       }
       Eigen::MatrixXd dense = start, schur = start;

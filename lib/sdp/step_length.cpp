@@ -428,6 +428,18 @@ StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
 constexpr double kFineGridFloor = 0.5;
 constexpr int kCoarseGridTries = 30;
 
+template <class FormTrial, class LowestEstimate>
+double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate) {
+  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial);
+  const double lmin = lowest_estimate();
+  const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
+  if (tau >= 1.0) return alpha;
+  return shrink_until_passes(alpha, [&](double a) {
+    form_trial(a);
+    return positive_definite();
+  });
+}
+
 template <class FormTrial>
 double StepLength::on_grid(double tau, FormTrial form_trial) {
   const bool predictor = tau >= 1.0;
@@ -446,13 +458,9 @@ double StepLength::on_grid(double tau, FormTrial form_trial) {
 double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
                         const Eigen::MatrixXd& delta, double tau) {
   if (!delta.allFinite()) return 0.0;
-  const auto form_trial = [&](double a) { trial_ = P + a * delta; };
-  if (P.rows() <= kGridStepMaxSize) return on_grid(tau, form_trial);
-  const double lmin =
-      lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
-  const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
-  if (tau >= 1.0) return alpha;
-  return shrink_until_positive(alpha, form_trial);
+  return step(P.rows(), tau, [&](double a) { trial_ = P + a * delta; }, [&] {
+    return lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
+  });
 }
 
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
@@ -463,14 +471,12 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
     trial_ = P;
     for (Eigen::Index i = 0; i < n; i += d) trial_.block(i, i, d, d) += a * D.middleRows(i, d).leftCols(d);
   };
-  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial);
-  const double lmin = lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
-    w.resize(n);  // Δ u block by block
-    for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
+  return step(n, tau, form_trial, [&] {
+    return lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
+      w.resize(n);  // Δ u block by block
+      for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
+    });
   });
-  const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
-  if (tau >= 1.0) return alpha;
-  return shrink_until_positive(alpha, form_trial);
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {

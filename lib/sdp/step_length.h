@@ -134,18 +134,15 @@ class StepLength {
   void take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor);
 
  private:
-  // The grid's step (kGridStepMaxSize): form_trial(a) writes P + aΔ into trial_.
+  // full's and block_diagonal's step for n × n matrices: form_trial(a) writes P + aΔ into trial_,
+  // lowest_estimate() returns Lanczos's estimate of λ_min(L⁻¹ΔL⁻ᵀ) (read above kGridStepMaxSize
+  // only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for τ < 1 shrunk by
+  // 0.7 until P + αΔ passes a Cholesky test (shrink_until_passes: at most 30 tries, then 0).
+  template <class FormTrial, class LowestEstimate>
+  double step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate);
+  // The grid's step (kGridStepMaxSize).
   template <class FormTrial>
   double on_grid(double tau, FormTrial form_trial);
-  // Shrinks α by 0.7 until P + αΔ, which form_trial(α) writes into trial_, has a Cholesky
-  // factorisation (at most 30 tries, then 0).
-  template <class FormTrial>
-  double shrink_until_positive(double alpha, FormTrial form_trial) {
-    return shrink_until_passes(alpha, [&](double a) {
-      form_trial(a);
-      return positive_definite();
-    });
-  }
   bool positive_definite();  // Cholesky test of trial_
 
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
