@@ -341,14 +341,30 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
   multiply<Shape::lower>(inverse.bottomRightCorner(m, m), BA, inverse.bottomLeftCorner(m, k), -1.0, false);
 }
 
-// Below this size W = Gᴴ G is one dense product (G lower triangular); above it the recursion.
+// Below this size a real W = Gᴴ G is one dense product (G lower triangular); above it the
+// recursion.
 constexpr Eigen::Index kGramBlock = 32;
 
+// A complex W = Gᴴ G of more than kGramLoopsMaxSize and at most kGramRankUpdateMaxSize rows is
+// Eigen's Hermitian rank-k update (herk: the lower triangle of W += Gᴴ G, on the complex
+// matrix-product kernel); larger ones split by recursion until their diagonal blocks are this
+// size. The update does not skip G's zero triangle (n³/2 multiply-adds against the loops' n³/6)
+// and still runs faster than gram_of_lower_by_loops or the recursion's three real products
+// (AVX-512, n = 16 / 24 / 32 / 48 / 64: 0.5 / 1.1 / 2.2 / 6.4 / 13.3 µs against 0.6 / 1.6 / 3.4 /
+// 8.4 / 17.6; n = 100 / 128 / 200 by recursion onto it 0.90–0.96 of the time). From about 92 rows
+// Eigen's update itself gets 2–2.5× slower (n = 100: 116 µs), hence the recursion above 64.
+// Tight_noisy N = 32 / 64 / 100 took 0.94 / 0.96 / 0.98 of the time (BENCHMARKS.md, session 46).
+// A real W this way lost (n ≤ 32 1.0–1.75×, n = 48 … 128 1.2–1.3× the time of the dense product
+// and the recursion).
+constexpr Eigen::Index kGramLoopsMaxSize = 12;
+constexpr Eigen::Index kGramRankUpdateMaxSize = 64;
+
 // W = Gᴴ G for a complex lower-triangular G (n × n, zeros above the diagonal) by dot products of
-// its columns, from row max(i, j) on where both are nonzero: tight_noisy N = 12 / 32 / 64 took
-// 0.92 / 0.94 / 0.97 of the time against Eigen's complex product (three real ones from 16 rows
-// on), N = 5, 6, 100, 200 about the same; a real W this way 0.98–1.0 (BENCHMARKS.md,
-// session 39). W's diagonal is set real and its upper triangle the conjugate of the lower.
+// its columns, from row max(i, j) on where both are nonzero; up to kGramLoopsMaxSize rows since
+// session 46 (up to 32 before: tight_noisy N = 12 / 32 / 64 had taken 0.92 / 0.94 / 0.97 of the
+// time against Eigen's complex product, three real ones from 16 rows on; a real W this way
+// 0.98–1.0; BENCHMARKS.md, session 39). W's diagonal is set real and its upper triangle the
+// conjugate of the lower.
 void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>> G,
                             Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> W) {
   using Complex = std::complex<double>;
@@ -367,7 +383,9 @@ void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterSt
 }
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
-// (both triangles). With G = [A 0; B C] (A k × k and C m × m lower triangular, B m × k):
+// (real: both triangles; complex: the lower triangle, the upper one left stale in the blocks the
+// rank-k update wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C
+// m × m lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
 // the diagonal blocks by recursion, the rest by products: about n³/3 multiply-adds against n³ for
 // the product of the dense matrices, n³/4 once Cᴴ B goes through the triangular product (blocks
@@ -377,7 +395,12 @@ void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen:
                    Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> W) {
   const Eigen::Index n = G.rows();
   if constexpr (!std::is_same_v<Scalar, double>) {
-    if (n <= kGramBlock) return gram_of_lower_by_loops(G, W);
+    if (n <= kGramLoopsMaxSize) return gram_of_lower_by_loops(G, W);
+    if (n <= kGramRankUpdateMaxSize) {
+      W.template triangularView<Eigen::Lower>().setZero();
+      W.template selfadjointView<Eigen::Lower>().rankUpdate(G.adjoint());
+      return;
+    }
   }
   if (n <= kGramBlock) {
     multiply(G.adjoint(), G, W, 1.0, false);
@@ -402,9 +425,9 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
-  // Products by three real ones (multiply) give a Gram block whose (i, j) and (j, i)
-  // entries differ in the last bits and a diagonal with a rounding-sized imaginary part: W is made
-  // Hermitian from its lower triangle (its readers take either triangle).
+  // gram_of_lower writes the lower triangle (products by three real ones would also leave (i, j)
+  // and (j, i) entries that differ in the last bits, and a diagonal with a rounding-sized
+  // imaginary part): W is made Hermitian from its lower triangle (its readers take either).
   W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
   for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
 }
