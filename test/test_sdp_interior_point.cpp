@@ -784,12 +784,13 @@ void expect_triangular_kernels(int n, std::mt19937& rng) {
   const Matrix Z = B * B.adjoint() + n * Matrix::Identity(n, n);
   Matrix L = Z;
   ASSERT_TRUE(fact::sdp::detail::cholesky_in_place(L));
-  // NaN above L's diagonal and in L⁻¹'s storage beforehand: the inverse must read only L's lower
-  // triangle and write zeros above its own diagonal (the interior point's factors keep leftovers
-  // above theirs).
+  // NaN above L's diagonal and in L⁻¹'s and W's storage beforehand: the inverse must read only
+  // L's lower triangle and write zeros above its own diagonal (the interior point's factors keep
+  // leftovers above theirs), and the Gram must not add to what W held (the complex rank-k update
+  // accumulates into W's lower triangle).
   const double nan = std::numeric_limits<double>::quiet_NaN();
   L.template triangularView<Eigen::StrictlyUpper>().setConstant(nan);
-  Matrix L_inv = Matrix::Constant(n, n, nan), W;
+  Matrix L_inv = Matrix::Constant(n, n, nan), W = Matrix::Constant(n, n, nan);
   fact::sdp::detail::invert_lower_factor(L, L_inv);
   L = Matrix(L.template triangularView<Eigen::Lower>());
   fact::sdp::detail::gram_of_lower_factor(L_inv, W);
