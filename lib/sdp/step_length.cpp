@@ -351,9 +351,10 @@ constexpr Eigen::Index kGramBlock = 32;
 // size. The update does not skip G's zero triangle (n³/2 multiply-adds against the loops' n³/6)
 // and still runs faster than gram_of_lower_by_loops or the recursion's three real products
 // (AVX-512, n = 16 / 24 / 32 / 48 / 64: 0.5 / 1.1 / 2.2 / 6.4 / 13.3 µs against 0.6 / 1.6 / 3.4 /
-// 8.4 / 17.6; n = 100 / 128 / 200 by recursion onto it 0.90–0.96 of the time). From about 92 rows
+// 8.4 / 17.2; n = 100 / 128 / 200 by recursion onto it 0.90–0.98 of the time). From about 92 rows
 // Eigen's update itself gets 2–2.5× slower (n = 100: 116 µs), hence the recursion above 64.
-// Tight_noisy N = 32 / 64 / 100 took 0.94 / 0.96 / 0.98 of the time (BENCHMARKS.md, session 46).
+// The benchmark's tight_noisy N = 32 / 64 / 100 took 0.94 / 0.96 / 0.98 of the time, tight sweeps
+// at N = 24 … 100 0.93–0.99 (BENCHMARKS.md, session 46).
 // A real W this way lost (n ≤ 32 1.0–1.75×, n = 48 … 128 1.2–1.3× the time of the dense product
 // and the recursion).
 constexpr Eigen::Index kGramLoopsMaxSize = 12;
