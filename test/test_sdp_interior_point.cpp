@@ -798,6 +798,7 @@ void expect_triangular_kernels(int n, std::mt19937& rng) {
   EXPECT_LT((L_inv * L - I).cwiseAbs().maxCoeff(), 1e-13);
   EXPECT_EQ(Matrix(L_inv.template triangularView<Eigen::StrictlyUpper>()).cwiseAbs().maxCoeff(), 0.0);
   const Matrix dense = L_inv.adjoint() * L_inv;
+  EXPECT_TRUE(W.allFinite());  // (maxCoeff below skips NaN entries)
   EXPECT_LT((W - dense).cwiseAbs().maxCoeff(), 1e-14 * dense.cwiseAbs().maxCoeff());
   EXPECT_LT((W * Z - I).cwiseAbs().maxCoeff(), 1e-12);
   if constexpr (Eigen::NumTraits<typename Matrix::Scalar>::IsComplex) {

@@ -384,8 +384,8 @@ void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterSt
 }
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
-// (real: both triangles; complex: the lower triangle, the upper one left stale in the blocks the
-// rank-k update wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C
+// (real, and complex up to kGramLoopsMaxSize rows: both triangles; else the lower triangle, the
+// upper one left stale in the blocks the rank-k update wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C
 // m × m lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
 // the diagonal blocks by recursion, the rest by products: about n³/3 multiply-adds against n³ for
@@ -426,9 +426,10 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
-  // gram_of_lower writes the lower triangle (products by three real ones would also leave (i, j)
-  // and (j, i) entries that differ in the last bits, and a diagonal with a rounding-sized
-  // imaginary part): W is made Hermitian from its lower triangle (its readers take either).
+  // gram_of_lower leaves the upper triangle stale where the rank-k update wrote, and above 64 rows
+  // its products by three real ones leave (i, j) and (j, i) entries that differ in the last bits
+  // and a diagonal with a rounding-sized imaginary part: W is made Hermitian from its lower
+  // triangle (its readers take either).
   W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
   for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
 }
