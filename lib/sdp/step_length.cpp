@@ -364,8 +364,8 @@ constexpr Eigen::Index kGramRankUpdateMaxSize = 64;
 // its columns, from row max(i, j) on where both are nonzero; up to kGramLoopsMaxSize rows since
 // session 46 (up to 32 before: tight_noisy N = 12 / 32 / 64 had taken 0.92 / 0.94 / 0.97 of the
 // time against Eigen's complex product, three real ones from 16 rows on; a real W this way
-// 0.98–1.0; BENCHMARKS.md, session 39). W's diagonal is set real and its upper triangle the
-// conjugate of the lower.
+// 0.98–1.0; BENCHMARKS.md, session 39). Only W's lower triangle is written, its diagonal real
+// (gram_of_lower_factor mirrors it).
 void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>> G,
                             Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> W) {
   using Complex = std::complex<double>;
@@ -378,15 +378,14 @@ void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterSt
       Complex sum = 0;
       for (Eigen::Index k = i; k < n; ++k) sum += std::conj(gi[k]) * gj[k];
       W(i, j) = sum;
-      W(j, i) = std::conj(sum);
     }
   }
 }
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
-// (real, and complex up to kGramLoopsMaxSize rows: both triangles; else the lower triangle, the
-// upper one left stale in the blocks the rank-k update wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C
-// m × m lower triangular, B m × k):
+// (real: both triangles; complex: the lower triangle, the upper one left stale in the blocks the
+// leaves wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C m × m
+// lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
 // the diagonal blocks by recursion, the rest by products: about n³/3 multiply-adds against n³ for
 // the product of the dense matrices, n³/4 once Cᴴ B goes through the triangular product (blocks
@@ -426,7 +425,7 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
-  // gram_of_lower leaves the upper triangle stale where the rank-k update wrote, and above 64 rows
+  // gram_of_lower leaves the upper triangle stale where its leaves wrote, and above 64 rows
   // its products by three real ones leave (i, j) and (j, i) entries that differ in the last bits
   // and a diagonal with a rounding-sized imaginary part: W is made Hermitian from its lower
   // triangle (its readers take either).
