@@ -969,15 +969,16 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
 }
 
 // cholesky_in_place on every path (real: Eigen's unblocked kernel below 128 rows, its blocked one
-// from 128; complex: complex_cholesky_by_loops below 64 rows, Eigen's unblocked kernel below 256,
-// its blocked one from 256): L Lᴴ = A for a positive definite A, the upper triangle left as it
+// from 128; complex: complex_cholesky_by_loops below 40 rows, complex_cholesky_by_panels of 24
+// columns below 256 (a last panel of 16, 24 and 1 column at n = 40, 48 and 49), Eigen's blocked
+// kernel from 256): L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
 // negative first pivot), for a singular one (a last pivot of exactly 0) and for a NaN or infinite
 // entry on the diagonal or below it.
 template <class Matrix>
 void expect_cholesky_on_every_path(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n : {1, 2, 5, 31, 32, 63, 64, 100, 127, 128, 140, 255, 256}) {
+  for (int n : {1, 2, 5, 31, 32, 39, 40, 48, 49, 63, 64, 100, 127, 128, 140, 255, 256}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
     const Matrix A = B * B.adjoint() + Matrix::Identity(n, n);

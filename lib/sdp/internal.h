@@ -155,17 +155,30 @@ constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
 // Below this size a complex cholesky_in_place runs complex_cholesky_by_loops instead of Eigen's
 // unblocked kernel: tight_noisy N = 5 / 6 / 12 / 32 took 0.97 / 0.96 / 0.97 / 0.97 of the time,
 // N = 64 … 200 the same (64 and 128 measured alike at N = 32; 256 lost 9 % at N = 200). The same
-// loop on real matrices gained nothing (BENCHMARKS.md, session 39).
-constexpr Eigen::Index kLoopComplexCholeskyMaxSize = 64;
+// loop on real matrices gained nothing (BENCHMARKS.md, session 39). From this size up to
+// kBlockedComplexCholeskyMinSize it runs complex_cholesky_by_panels: n = 40 / 48 / 64 / 100 /
+// 128 / 200 took 2.8 / 4.1 / 8.1 / 23 / 43 / 140 µs against the loops' 3.2 / 5.2 and Eigen's
+// unblocked kernel's 8.9 / 28 / 79 / 253 µs (complex_cholesky_by_panels is 1.0–1.07× Eigen's
+// blocked kernel from 256; BENCHMARKS.md, session 47).
+constexpr Eigen::Index kLoopComplexCholeskyMaxSize = 40;
+// Columns per panel of complex_cholesky_by_panels (16 and 32 measured within 3 % of 24).
+constexpr Eigen::Index kComplexCholeskyPanel = 24;
 
 // A = L Lᴴ for a Hermitian A (n × n), in place into A's lower triangle (its upper one untouched),
 // right-looking: column k scaled by its pivot's root, then taken off the trailing columns. False
 // at the first pivot that is not positive (a NaN one too).
 bool complex_cholesky_by_loops(Eigen::MatrixXcd& A);
 
+// The same by panels of kComplexCholeskyPanel columns, right-looking: the panel's diagonal block
+// by complex_cholesky_by_loops, the block below it by a triangular solve with that block's
+// factor, and its product with its own adjoint taken off the trailing lower triangle by Eigen's
+// Hermitian rank-k update (the matrix-product kernel, where the loops and Eigen's unblocked
+// kernel go a column at a time). False at the first pivot that is not positive.
+bool complex_cholesky_by_panels(Eigen::MatrixXcd& A);
+
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
 // triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize (complex:
-// complex_cholesky_by_loops below kLoopComplexCholeskyMaxSize, then Eigen's unblocked kernel
+// complex_cholesky_by_loops below kLoopComplexCholeskyMaxSize, then complex_cholesky_by_panels
 // below kBlockedComplexCholeskyMinSize) and its blocked one from it;
 // false when A is not positive definite or its lower triangle has a NaN or infinite entry (of a
 // complex diagonal only the real part is read, as for any self-adjoint A).
@@ -182,6 +195,7 @@ bool cholesky_in_place(Matrix& A) {
   // the diagonal and infinite, makes a later pivot −∞), checked here.
   if constexpr (is_complex) {
     if (A.rows() < kLoopComplexCholeskyMaxSize) return complex_cholesky_by_loops(A) && A.diagonal().real().allFinite();
+    if (A.rows() < blocked_from) return complex_cholesky_by_panels(A) && A.diagonal().real().allFinite();
   }
   return (A.rows() < blocked_from ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
          A.diagonal().real().allFinite();
