@@ -811,7 +811,7 @@ void expect_triangular_kernels(int n, std::mt19937& rng) {
 
 TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
   std::mt19937 rng(13);
-  for (int n : {1, 2, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 32, 33, 48, 64, 65, 100, 129}) {
+  for (int n : {1, 2, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 31, 32, 33, 48, 64, 65, 79, 80, 100, 129}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     expect_triangular_kernels<Eigen::MatrixXd>(n, rng);
     expect_triangular_kernels<Eigen::MatrixXcd>(n, rng);

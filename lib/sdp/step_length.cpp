@@ -289,6 +289,14 @@ namespace {
 // too, but not at 48, session 28).
 template <class Scalar>
 constexpr Eigen::Index kInverseBlock = std::is_same_v<Scalar, double> ? 24 : 8;
+// From this size a complex L⁻¹ goes by panels (invert_lower_by_panels) of 8 columns, from
+// kWidePanelInverseMinSize of 16, instead of the recursion: n = 32 / 48 / 64 / 100 / 128 / 200
+// took 2.5 / 5.7 / 11.0 / 29.8 / 54.5 / 177 µs against 3.4 / 7.1 / 14.6 / 45 / 74 / 224 µs
+// (n = 24: 1.5 against 1.35). A real L⁻¹ by panels lost at every size from 24 to 200 (0.59 /
+// 14.4 / 64.8 µs at n = 24 / 100 / 200 by the recursion, 0.96 / 16.3 / 69.5 by panels;
+// BENCHMARKS.md, session 47).
+constexpr Eigen::Index kPanelInverseMinSize = 32;
+constexpr Eigen::Index kWidePanelInverseMinSize = 80;
 
 // Real L⁻¹ for n ≤ P rows on P × P copies fixed at compile time. Row k of L⁻¹ is final once
 // divided by L_kk; its multiples are then taken off the rows below in every column at once, whole
@@ -458,9 +466,35 @@ void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
   invert_lower<double>(L, inverse);
 }
 
+namespace {
+
+// Complex L⁻¹ (n × n) by panels of `width` columns from the last one up (LAPACK's trtri order):
+// with the rows below panel j already inverted (X₂₂ = L₂₂⁻¹, lower triangular), the panel's
+// diagonal block is X₁₁ = L₁₁⁻¹ (invert_lower) and the block below it X₂₁ = −X₂₂ L₂₁ X₁₁, two
+// products with a triangular operand. Eigen's complex kernels take them as they are (the
+// three-product form's splitting costs more than it saves on panels this narrow).
+void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse, Eigen::Index width) {
+  using Complex = std::complex<double>;
+  const Eigen::Index n = L.rows();
+  inverse.setZero();
+  Eigen::MatrixXcd product(n, width);  // X₂₂ L₂₁, (rows below the panel) × width
+  for (Eigen::Index j = (n - 1) / width * width; j >= 0; j -= width) {
+    const Eigen::Index w = std::min(width, n - j), below = n - j - w;
+    invert_lower<Complex>(L.block(j, j, w, w), inverse.block(j, j, w, w));
+    if (below == 0) continue;
+    auto X22_L21 = product.topRows(below);
+    X22_L21.noalias() = inverse.block(j + w, j + w, below, below).triangularView<Eigen::Lower>() * L.block(j + w, j, below, w);
+    inverse.block(j + w, j, below, w).noalias() = -X22_L21 * inverse.block(j, j, w, w).triangularView<Eigen::Lower>();
+  }
+}
+
+}  // namespace
+
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
-  inverse.resize(L.rows(), L.cols());
-  invert_lower<std::complex<double>>(L, inverse);
+  const Eigen::Index n = L.rows();
+  inverse.resize(n, n);
+  if (n < kPanelInverseMinSize) return invert_lower<std::complex<double>>(L, inverse);
+  invert_lower_by_panels(L, inverse, n < kWidePanelInverseMinSize ? 8 : 16);
 }
 
 StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
