@@ -373,20 +373,21 @@ void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::
 // recursion.
 constexpr Eigen::Index kGramBlock = 32;
 
-// A complex W = Gᴴ G of more than kGramLoopsMaxSize and at most kGramRankUpdateMaxSize rows is
+// A complex W = Gᴴ G of more than kGramLoopsMaxSize rows and fewer than kGramPanelMinSize is
 // Eigen's Hermitian rank-k update (herk: the lower triangle of W += Gᴴ G, on the complex
-// matrix-product kernel); larger ones split by recursion until their diagonal blocks are this
-// size. The update does not skip G's zero triangle (n³/2 multiply-adds against the loops' n³/6)
-// and still runs faster than gram_of_lower_by_loops or the recursion's three real products
-// (AVX-512, n = 16 / 24 / 32 / 48 / 64: 0.5 / 1.1 / 2.2 / 6.4 / 13.3 µs against 0.6 / 1.6 / 3.4 /
-// 8.4 / 17.2; n = 100 / 128 / 200 by recursion onto it 0.90–0.98 of the time). From about 92 rows
-// Eigen's update itself gets 2–2.5× slower (n = 100: 116 µs), hence the recursion above 64.
-// The benchmark's tight_noisy N = 32 / 64 / 100 took 0.94 / 0.96 / 0.98 of the time, tight sweeps
-// at N = 24 … 100 0.93–0.99 (BENCHMARKS.md, session 46).
+// matrix-product kernel). It does not skip G's zero triangle (n³/2 multiply-adds against the
+// loops' n³/6) and still runs faster than gram_of_lower_by_loops or the recursion's three real
+// products (AVX-512, n = 16 / 24: 0.5 / 1.1 µs against 0.6 / 1.6; BENCHMARKS.md, session 46).
+// From kGramPanelMinSize rows W is the sum of the Grams of G's row panels of kGramPanel rows, each
+// a rank-kGramPanel update of the leading block left of the panel's last column (n³/6
+// multiply-adds in all): n = 32 / 48 / 64 / 100 / 128 / 200 took 1.7 / 4.4 / 9.2 / 26 / 77 /
+// 158 µs against 2.1 / 6.1 / 12.8 / 47 / 90 / 271 µs by one update up to 64 rows and the
+// recursion onto it above (BENCHMARKS.md, session 47; panels of 8, 24 and 32 rows within 15 %).
 // A real W this way lost (n ≤ 32 1.0–1.75×, n = 48 … 128 1.2–1.3× the time of the dense product
-// and the recursion).
+// and the recursion; session 46).
 constexpr Eigen::Index kGramLoopsMaxSize = 12;
-constexpr Eigen::Index kGramRankUpdateMaxSize = 64;
+constexpr Eigen::Index kGramPanelMinSize = 32;
+constexpr Eigen::Index kGramPanel = 16;
 
 // W = Gᴴ G for a complex lower-triangular G (n × n, zeros above the diagonal) by dot products of
 // its columns, from row max(i, j) on where both are nonzero; up to kGramLoopsMaxSize rows since
@@ -411,8 +412,8 @@ void gram_of_lower_by_loops(Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterSt
 }
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal), written into the n × n W
-// (real: both triangles; complex: the lower triangle, the upper one left stale in the blocks the
-// leaves wrote, for gram_of_lower_factor to mirror). With G = [A 0; B C] (A k × k and C m × m
+// (real: both triangles; complex: the lower triangle, by the loops, one rank-k update or row
+// panels, for gram_of_lower_factor to mirror). Real, with G = [A 0; B C] (A k × k and C m × m
 // lower triangular, B m × k):
 //   W = [Aᴴ A + Bᴴ B   (Cᴴ B)ᴴ;  Cᴴ B   Cᴴ C],
 // the diagonal blocks by recursion, the rest by products: about n³/3 multiply-adds against n³ for
@@ -424,11 +425,18 @@ void gram_of_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen:
   const Eigen::Index n = G.rows();
   if constexpr (!std::is_same_v<Scalar, double>) {
     if (n <= kGramLoopsMaxSize) return gram_of_lower_by_loops(G, W);
-    if (n <= kGramRankUpdateMaxSize) {
-      W.template triangularView<Eigen::Lower>().setZero();
+    W.template triangularView<Eigen::Lower>().setZero();
+    if (n < kGramPanelMinSize) {
       W.template selfadjointView<Eigen::Lower>().rankUpdate(G.adjoint());
       return;
     }
+    // Row panel r (rows r … r + w − 1) is zero right of column r + w − 1: it adds its Gram to
+    // W's leading (r + w) × (r + w) block only.
+    for (Eigen::Index r = 0; r < n; r += kGramPanel) {
+      const Eigen::Index w = std::min(kGramPanel, n - r);
+      W.topLeftCorner(r + w, r + w).template selfadjointView<Eigen::Lower>().rankUpdate(G.block(r, 0, w, r + w).adjoint());
+    }
+    return;
   }
   if (n <= kGramBlock) {
     multiply(G.adjoint(), G, W, 1.0, false);
@@ -453,10 +461,8 @@ void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W) {
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   W.resize(G.rows(), G.cols());
   gram_of_lower<std::complex<double>>(G, W);
-  // gram_of_lower leaves the upper triangle stale where its leaves wrote, and above 64 rows
-  // its products by three real ones leave (i, j) and (j, i) entries that differ in the last bits
-  // and a diagonal with a rounding-sized imaginary part: W is made Hermitian from its lower
-  // triangle (its readers take either).
+  // gram_of_lower writes the lower triangle only (the loops' diagonal real, the rank-k updates'
+  // with a rounding-sized imaginary part): W is made Hermitian from it (its readers take either).
   W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
   for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
 }

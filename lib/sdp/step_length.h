@@ -67,10 +67,10 @@ void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal, as invert_lower_factor
-// writes), into W (n × n, both triangles): Z⁻¹ = Lz⁻ᴴ Lz⁻¹ from Lz⁻¹. Recursive 2 × 2 blocking
-// above 32 × 32, about n³/3 multiply-adds instead of n³; complex: above 64 × 64, with blocks of
-// 13 … 64 rows by Eigen's rank-k update (n³/2 multiply-adds on the complex product kernel, faster
-// than n³/6 in loops).
+// writes), into W (n × n, both triangles): Z⁻¹ = Lz⁻ᴴ Lz⁻¹ from Lz⁻¹. Real: recursive 2 × 2
+// blocking above 32 × 32, about n³/3 multiply-adds instead of n³. Complex: loops up to 12 rows,
+// Eigen's rank-k update below 32 (n³/2 multiply-adds on the complex product kernel, faster than
+// n³/6 in loops), rank-16 updates by row panels from 32 (n³/6).
 void gram_of_lower_factor(const Eigen::MatrixXd& G, Eigen::MatrixXd& W);
 void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W);
 
