@@ -154,12 +154,13 @@ constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
 
 // Below this size a complex cholesky_in_place runs complex_cholesky_by_loops instead of Eigen's
 // unblocked kernel: tight_noisy N = 5 / 6 / 12 / 32 took 0.97 / 0.96 / 0.97 / 0.97 of the time,
-// N = 64 … 200 the same (64 and 128 measured alike at N = 32; 256 lost 9 % at N = 200). The same
-// loop on real matrices gained nothing (BENCHMARKS.md, session 39). From this size up to
-// kBlockedComplexCholeskyMinSize it runs complex_cholesky_by_panels: n = 40 / 48 / 64 / 100 /
-// 128 / 200 took 2.8 / 4.1 / 8.1 / 23 / 43 / 140 µs against the loops' 3.2 / 5.2 and Eigen's
-// unblocked kernel's 8.9 / 28 / 79 / 253 µs (complex_cholesky_by_panels is 1.0–1.07× Eigen's
-// blocked kernel from 256; BENCHMARKS.md, session 47).
+// N = 64 … 200 the same (a threshold of 64 and of 128 measured alike at N = 32; 256 lost 9 % at
+// N = 200). The same loop on real matrices gained nothing (BENCHMARKS.md, session 39). From this
+// size (64 until session 47) up to kBlockedComplexCholeskyMinSize it runs
+// complex_cholesky_by_panels: n = 40 / 48 / 64 / 100 / 128 / 200 took 2.8 / 4.1 / 8.1 / 23 / 43 /
+// 140 µs against the loops' 3.2 / 5.2 and Eigen's unblocked kernel's 8.9 / 28 / 79 / 253 µs
+// (complex_cholesky_by_panels is 1.0–1.07× Eigen's blocked kernel from 256; BENCHMARKS.md,
+// session 47).
 constexpr Eigen::Index kLoopComplexCholeskyMaxSize = 40;
 // Columns per panel of complex_cholesky_by_panels (16 and 32 measured within 3 % of 24).
 constexpr Eigen::Index kComplexCholeskyPanel = 24;
