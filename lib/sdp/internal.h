@@ -165,10 +165,10 @@ constexpr Eigen::Index kLoopComplexCholeskyMaxSize = 40;
 // Columns per panel of complex_cholesky_by_panels (16 and 32 measured within 3 % of 24).
 constexpr Eigen::Index kComplexCholeskyPanel = 24;
 
-// A = L Lᴴ for a Hermitian A (n × n), in place into A's lower triangle (its upper one untouched),
-// right-looking: column k scaled by its pivot's root, then taken off the trailing columns. False
-// at the first pivot that is not positive (a NaN one too).
-bool complex_cholesky_by_loops(Eigen::MatrixXcd& A);
+// A = L Lᴴ for a Hermitian A (n × n, a matrix or a diagonal block of one), in place into A's lower
+// triangle (its upper one untouched), right-looking: column k scaled by its pivot's root, then
+// taken off the trailing columns. False at the first pivot that is not positive (a NaN one too).
+bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A);
 
 // The same by panels of kComplexCholeskyPanel columns, right-looking: the panel's diagonal block
 // by complex_cholesky_by_loops, the block below it by a triangular solve with that block's

@@ -237,10 +237,7 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
   return true;
 }
 
-namespace {
-
-// complex_cholesky_by_loops on a block (a diagonal block of a larger matrix: an outer stride).
-bool complex_cholesky_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A) {
+bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A) {
   using Complex = std::complex<double>;
   const Eigen::Index n = A.rows();
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -260,15 +257,11 @@ bool complex_cholesky_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>
   return true;
 }
 
-}  // namespace
-
-bool complex_cholesky_by_loops(Eigen::MatrixXcd& A) { return complex_cholesky_loops(A); }
-
 bool complex_cholesky_by_panels(Eigen::MatrixXcd& A) {
   const Eigen::Index n = A.rows();
   for (Eigen::Index k = 0; k < n; k += kComplexCholeskyPanel) {
     const Eigen::Index width = std::min(kComplexCholeskyPanel, n - k), below = n - k - width;
-    if (!complex_cholesky_loops(A.block(k, k, width, width))) return false;
+    if (!complex_cholesky_by_loops(A.block(k, k, width, width))) return false;
     if (below == 0) break;
     auto panel = A.block(k + width, k, below, width);  // A21 → L21 = A21 L11⁻ᴴ
     A.block(k, k, width, width).triangularView<Eigen::Lower>().adjoint().solveInPlace<Eigen::OnTheRight>(panel);

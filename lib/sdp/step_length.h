@@ -5,8 +5,8 @@
 // boundary is at α_max = −1/λ_min(B) (no boundary when λ_min(B) ≥ 0). For small n the step is
 // the first point of a geometric grid 1, r, r², … whose P + (α/τ)Δ passes a Cholesky test, which
 // needs neither B nor its spectrum; for large n λ_min(B) is a Lanczos estimate, and the
-// corrector's step is confirmed by a Cholesky test. All work matrices live in a StepLength object that the
-// interior point allocates once.
+// corrector's step is confirmed by a Cholesky test. All work matrices live in a StepLength object
+// that the interior point allocates once.
 #pragma once
 
 #include <algorithm>
