@@ -811,7 +811,9 @@ void expect_triangular_kernels(int n, std::mt19937& rng) {
 
 TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
   std::mt19937 rng(13);
-  for (int n : {1, 2, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 31, 32, 33, 48, 64, 65, 79, 80, 100, 129}) {
+  // (complex L⁻¹: padded sizes 4, 8, … 32 and panels of 24 from 33 rows; both sides of each step)
+  for (int n : {1, 2, 3, 4, 5, 8, 9, 12, 13, 16, 17, 20, 21, 24, 25, 28, 29, 31, 32, 33, 48, 49, 56, 57, 64, 65, 72, 73, 79,
+                80, 100, 129}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     expect_triangular_kernels<Eigen::MatrixXd>(n, rng);
     expect_triangular_kernels<Eigen::MatrixXcd>(n, rng);

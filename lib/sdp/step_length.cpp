@@ -272,24 +272,24 @@ bool complex_cholesky_by_panels(Eigen::MatrixXcd& A) {
 
 namespace {
 
-// Below this size a diagonal block of L is inverted directly (real: invert_lower_padded; complex:
-// forward substitution by columns); above it the recursion's matrix products, which Eigen
-// vectorises far better than its triangular solves (complex, N = 100, AVX-512: 0.06 ms against
-// 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
-// Complex substitution loops are not vectorised, so complex blocks split further: 8 against 24,
-// N = 12 / 32 0.60 / 3.2 µs → 0.44 / 2.3 µs a call (real: 24 measured best with substitution,
-// BENCHMARKS.md, session 25; the padded kernel measured faster than the recursion up to 32 rows
-// too, but not at 48, session 28).
-template <class Scalar>
-constexpr Eigen::Index kInverseBlock = std::is_same_v<Scalar, double> ? 24 : 8;
-// From this size a complex L⁻¹ goes by panels (invert_lower_by_panels) of 8 columns, from
-// kWidePanelInverseMinSize of 16, instead of the recursion: n = 32 / 48 / 64 / 100 / 128 / 200
-// took 2.5 / 5.7 / 11.0 / 29.8 / 54.5 / 177 µs against 3.4 / 7.1 / 14.6 / 45 / 74 / 224 µs
-// (n = 24: 1.5 against 1.35). A real L⁻¹ by panels lost at every size from 24 to 200 (0.59 /
-// 14.4 / 64.8 µs at n = 24 / 100 / 200 by the recursion, 0.96 / 16.3 / 69.5 by panels;
-// BENCHMARKS.md, session 47).
-constexpr Eigen::Index kPanelInverseMinSize = 32;
-constexpr Eigen::Index kWidePanelInverseMinSize = 80;
+// Below this size a real diagonal block of L is inverted directly (invert_lower_padded); above it
+// the recursion's matrix products, which Eigen vectorises far better than its triangular solves
+// (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
+// Real: 24 measured best with substitution (BENCHMARKS.md, session 25; the padded kernel measured
+// faster than the recursion up to 32 rows too, but not at 48, session 28). A complex L⁻¹ of up to
+// kSplitInverseMaxSize rows goes by invert_complex_lower_padded instead (no recursion).
+constexpr Eigen::Index kInverseBlock = 24;
+constexpr Eigen::Index kSplitInverseMaxSize = 32;
+// Above kSplitInverseMaxSize a complex L⁻¹ goes by panels (invert_lower_by_panels) of
+// kInversePanel columns instead of the recursion: with 8 columns (16 from 80 rows) and the
+// diagonal blocks by substitution, n = 32 / 48 / 64 / 100 / 128 / 200 took 2.5 / 5.7 / 11.0 /
+// 29.8 / 54.5 / 177 µs against 3.4 / 7.1 / 14.6 / 45 / 74 / 224 µs (BENCHMARKS.md, session 47).
+// With the diagonal blocks by invert_complex_lower_padded, panels of 24 columns measured best
+// from 33 to 200 rows (8 / 16 / 24 / 32: n = 48 5.4 / 4.6 / 4.5 / 4.8 µs, n = 100 31.7 / 27.9 /
+// 26.3 / 26.9 µs, n = 200 204 / 177 / 169 / 165 µs; session 48). A real L⁻¹ by panels lost at
+// every size from 24 to 200 (0.59 / 14.4 / 64.8 µs at n = 24 / 100 / 200 by the recursion, 0.96 /
+// 16.3 / 69.5 by panels; session 47).
+constexpr Eigen::Index kInversePanel = 24;
 
 // Real L⁻¹ for n ≤ P rows on P × P copies fixed at compile time. Row k of L⁻¹ is final once
 // divided by L_kk; its multiples are then taken off the rows below in every column at once, whole
@@ -328,36 +328,73 @@ EIGEN_DONT_INLINE void invert_lower_small(const Eigen::Ref<const Eigen::MatrixXd
   return invert_lower_padded<24>(L, inverse);
 }
 
-// L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
-// zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products with a
-// triangular factor (multiply: Eigen's triangular product, or three of them when complex).
-// The diagonal of L is real and positive (a Cholesky factor): divisions are by its real part.
-template <class Scalar>
-void invert_lower(Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> L,
-                  Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0, Eigen::OuterStride<>> inverse) {
-  const Eigen::Index n = L.rows();
-  if constexpr (std::is_same_v<Scalar, double>) {
-    if (n <= kInverseBlock<Scalar>) return invert_lower_small(L, inverse);
-  }
-  if (n <= kInverseBlock<Scalar>) {  // complex: substitution by columns
-    inverse.setZero();
-    for (Eigen::Index j = 0; j < n; ++j) {  // column j of L⁻¹ solves L x = e_j, by columns of L
-      Scalar* x = &inverse(0, j);
-      x[j] = 1.0;
-      for (Eigen::Index k = j; k < n; ++k) {
-        x[k] /= std::real(L(k, k));
-        const Scalar xk = x[k];
-        const Scalar* l = L.data() + k * L.outerStride();  // column k
-        for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
-      }
+// Complex L⁻¹ for n ≤ P rows, as invert_lower_padded on split copies: L = A + iB and L⁻¹ = X + iY
+// each P × P real, fixed at compile time (A, B: L's strictly lower triangle, zero elsewhere; L's
+// diagonal is real and positive, a Cholesky factor's). Row k of L⁻¹ is final once scaled by
+// 1 / L_kk; its multiples then come off the rows below in every column, whole P-vectors of real
+// multiply-adds. Against the substitution by columns in std::complex (its divisions and loads
+// waiting on each x_k in turn) and, above 8 rows, the recursion on it: n = 5 / 8 / 12 / 16 / 24 /
+// 32 0.08 / 0.23 / 0.64 / 0.72 / 1.79 / 2.62 µs → 0.07 / 0.12 / 0.25 / 0.39 / 1.00 / 1.96 µs
+// (n = 32 against the panels; BENCHMARKS.md, session 48).
+template <int P>
+void invert_complex_lower_padded(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>>& L,
+                                 Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> inverse) {
+  using Padded = Eigen::Matrix<double, P, P>;
+  const int n = static_cast<int>(L.rows());
+  Padded below_re = Padded::Zero(), below_im = Padded::Zero();  // A and B (P × P)
+  Eigen::Matrix<double, P, 1> reciprocal = Eigen::Matrix<double, P, 1>::Zero();  // 1 / L_kk
+  for (int j = 0; j < n; ++j) {
+    for (int i = j + 1; i < n; ++i) {
+      below_re(i, j) = L(i, j).real();
+      below_im(i, j) = L(i, j).imag();
     }
-    return;
+    reciprocal[j] = 1.0 / L(j, j).real();
   }
+  Padded X = Padded::Identity(), Y = Padded::Zero();  // become Re and Im of L⁻¹
+  for (int k = 0; k < n; ++k) {
+    for (int c = 0; c <= k; ++c) {
+      X(k, c) *= reciprocal[k];
+      Y(k, c) *= reciprocal[k];
+    }
+    for (int c = 0; c <= k; ++c) {  // column c minus (A + iB) column k times (x + iy)
+      const double x = X(k, c), y = Y(k, c);
+      X.col(c) -= below_re.col(k) * x - below_im.col(k) * y;
+      Y.col(c) -= below_re.col(k) * y + below_im.col(k) * x;
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) inverse(i, j) = {X(i, j), Y(i, j)};
+}
+
+// invert_complex_lower_padded at the smallest padded size (a multiple of 4) that holds L. Not
+// inlined, as invert_lower_small.
+EIGEN_DONT_INLINE void invert_complex_lower_small(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>>& L,
+                                                  Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> inverse) {
+  switch ((L.rows() + 3) / 4) {
+    case 0:
+    case 1: return invert_complex_lower_padded<4>(L, inverse);
+    case 2: return invert_complex_lower_padded<8>(L, inverse);
+    case 3: return invert_complex_lower_padded<12>(L, inverse);
+    case 4: return invert_complex_lower_padded<16>(L, inverse);
+    case 5: return invert_complex_lower_padded<20>(L, inverse);
+    case 6: return invert_complex_lower_padded<24>(L, inverse);
+    case 7: return invert_complex_lower_padded<28>(L, inverse);
+    default: return invert_complex_lower_padded<32>(L, inverse);
+  }
+}
+
+// Real L⁻¹ of the lower triangle of L into the lower triangle of `inverse` (same size, upper part
+// zeroed): [A 0; B C]⁻¹ = [A⁻¹ 0; −C⁻¹ B A⁻¹  C⁻¹], the off-diagonal block by two products with a
+// triangular factor (multiply: Eigen's triangular product).
+void invert_lower(Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> L,
+                  Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>> inverse) {
+  const Eigen::Index n = L.rows();
+  if (n <= kInverseBlock) return invert_lower_small(L, inverse);
   const Eigen::Index k = n / 2, m = n - k;
-  invert_lower<Scalar>(L.topLeftCorner(k, k), inverse.topLeftCorner(k, k));
-  invert_lower<Scalar>(L.bottomRightCorner(m, m), inverse.bottomRightCorner(m, m));
+  invert_lower(L.topLeftCorner(k, k), inverse.topLeftCorner(k, k));
+  invert_lower(L.bottomRightCorner(m, m), inverse.bottomRightCorner(m, m));
   inverse.topRightCorner(k, m).setZero();
-  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> BA(m, k);  // B A⁻¹ (A⁻¹, C⁻¹ lower triangular, zeros above)
+  Eigen::MatrixXd BA(m, k);  // B A⁻¹ (A⁻¹, C⁻¹ lower triangular, zeros above)
   multiply<Shape::dense, Shape::lower>(L.bottomLeftCorner(m, k), inverse.topLeftCorner(k, k), BA, 1.0, false);
   multiply<Shape::lower>(inverse.bottomRightCorner(m, m), BA, inverse.bottomLeftCorner(m, k), -1.0, false);
 }
@@ -462,24 +499,23 @@ void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
 
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
   inverse.resize(L.rows(), L.cols());
-  invert_lower<double>(L, inverse);
+  invert_lower(L, inverse);
 }
 
 namespace {
 
 // Complex L⁻¹ (n × n) by panels of `width` columns from the last one up (LAPACK's trtri order):
 // with the rows below panel j already inverted (X₂₂ = L₂₂⁻¹, lower triangular), the panel's
-// diagonal block is X₁₁ = L₁₁⁻¹ (invert_lower) and the block below it X₂₁ = −X₂₂ L₂₁ X₁₁, two
-// products with a triangular operand. Eigen's complex kernels take them as they are (the
+// diagonal block is X₁₁ = L₁₁⁻¹ (invert_complex_lower_small) and the block below it
+// X₂₁ = −X₂₂ L₂₁ X₁₁, two products with a triangular operand. Eigen's complex kernels take them as they are (the
 // three-product form's splitting costs more than it saves on panels this narrow).
 void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse, Eigen::Index width) {
-  using Complex = std::complex<double>;
   const Eigen::Index n = L.rows();
   inverse.setZero();
   Eigen::MatrixXcd product(n, width);  // X₂₂ L₂₁, (rows below the panel) × width
   for (Eigen::Index j = (n - 1) / width * width; j >= 0; j -= width) {
     const Eigen::Index w = std::min(width, n - j), below = n - j - w;
-    invert_lower<Complex>(L.block(j, j, w, w), inverse.block(j, j, w, w));
+    invert_complex_lower_small(L.block(j, j, w, w), inverse.block(j, j, w, w));
     if (below == 0) continue;
     auto X22_L21 = product.topRows(below);
     X22_L21.noalias() = inverse.block(j + w, j + w, below, below).triangularView<Eigen::Lower>() * L.block(j + w, j, below, w);
@@ -492,8 +528,8 @@ void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
   const Eigen::Index n = L.rows();
   inverse.resize(n, n);
-  if (n < kPanelInverseMinSize) return invert_lower<std::complex<double>>(L, inverse);
-  invert_lower_by_panels(L, inverse, n < kWidePanelInverseMinSize ? 8 : 16);
+  if (n <= kSplitInverseMaxSize) return invert_complex_lower_small(L, inverse);
+  invert_lower_by_panels(L, inverse, kInversePanel);
 }
 
 StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
