@@ -174,19 +174,7 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
     }
 }
 
-// (column k of C as the sum of A's columns weighted by column k of B)
-void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) {
-  const Eigen::Index n = A.rows();
-  C.setZero(n, B.cols());
-  for (Eigen::Index k = 0; k < B.cols(); ++k) {
-    std::complex<double>* __restrict c = &C(0, k);
-    for (Eigen::Index j = 0; j < A.cols(); ++j) {
-      const std::complex<double> b = B(j, k);
-      const std::complex<double>* __restrict a = &A(0, j);
-      for (Eigen::Index i = 0; i < n; ++i) c[i] += a[i] * b;
-    }
-  }
-}
+EIGEN_DONT_INLINE void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) { C.noalias() = A.lazyProduct(B); }
 
 namespace {
 

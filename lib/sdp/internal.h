@@ -643,9 +643,14 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 // X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by plain loops: Eigen's lazy complex
 // product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md, session 39). X is resized.
 void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
-// C = A B for A N × N and B N × p, p small (the factor's rank), by plain loops: Eigen's complex
-// product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md, session 39). C is resized
-// to N × p and must not alias A or B.
+// C = A B for A N × N and B N × p, p small (the factor's rank), by Eigen's lazy (coefficient-wise)
+// product. Its general product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
+// session 39); the loops that replaced it then (column k of C as the sum of A's columns weighted
+// by column k of B) loaded each complex weight as two doubles and read them back as one vector, a
+// store-forwarding stall on every column (half of schur_complex_newton's own time at N = 12):
+// tight_noisy N = 5 / 6 / 12 / 24 / 32 took 0.89 / 0.90 / 0.88 / 0.93 / 0.98 of the time with the
+// lazy product, N = 48 … 200 the same (session 48). Not inlined: inlined into the Newton loop, it
+// gained half as much at N = 5 and 6. C is resized to N × p and must not alias A or B.
 void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::MatrixXcd& C);
 
 struct ComplexOutcome {
