@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -439,8 +440,9 @@ TEST(SdpComplexInteriorPoint, PolishWithTheShiftCappedByTheGradientTakesFewerSte
 
 // solve() passes the cap to the polish after complex dual scaling (N ≥ 27): over eight instances
 // whose polish the cap shortened when written (N = 28 seeds 1, 2, 4, 7; N = 32 seeds 2, 4, 5, 7),
-// automatic mode's complex_newton stages took 26 steps in all, against 35 without the cap; the
-// bound sits between the two.
+// automatic mode's first complex_newton stages (the hand-off's polish; a second one starts from
+// a wider factor after a saddle, N = 32 seed 2 since session 48) took 26 steps in all, against 35
+// without the cap; the bound sits between the two.
 TEST(SdpComplexInteriorPoint, AutomaticModeCapsThePolishShift) {
   int steps = 0;
   for (const auto& [drones, seed] : {std::pair{28, 1u}, std::pair{28, 2u}, std::pair{28, 4u}, std::pair{28, 7u},
@@ -451,11 +453,37 @@ TEST(SdpComplexInteriorPoint, AutomaticModeCapsThePolishShift) {
     ASSERT_TRUE(r.certified()) << r.reason;
     int polish = 0;
     for (const fact::sdp::Stage& stage : r.stages)
-      if (stage.method == "complex_newton") polish += stage.iterations;
+      if (stage.method == "complex_newton") {
+        polish = stage.iterations;
+        break;
+      }
     EXPECT_GT(polish, 0);
     steps += polish;
   }
   EXPECT_LE(steps, 30);
+}
+
+// N = 32 seed 2 (as above): the hand-off's factor (X down to 1e-2) has rank 2 and its Newton ends
+// at a saddle, λ_min(S) < 0, in 5 steps. Newton from X's factor down to 1e-3 (rank 3) certifies,
+// where the interior point used to resume for 24 more iterations; the optimum is the one the
+// interior point alone reaches.
+TEST(SdpComplexInteriorPoint, HandoffPolishAtASaddleStartsAgainFromAWiderFactor) {
+  const Eigen::MatrixXd C = fact::sdp::complex_form(fact::test::noisy_plain_cost(32, 2));
+  const fact::sdp::Result r = fact::sdp::solve(C, 2);
+  ASSERT_TRUE(r.certified()) << r.reason;
+  std::vector<std::string> methods;
+  for (const fact::sdp::Stage& stage : r.stages) methods.push_back(stage.method);
+  EXPECT_EQ(methods, (std::vector<std::string>{"complex_low_rank", "complex_dual_scaling", "complex_newton",
+                                               "complex_newton"}));
+  EXPECT_EQ(r.stages[2].outcome, "not certified");
+  EXPECT_EQ(r.stages[3].outcome, "certified");
+  EXPECT_GE(r.rank, 3);
+  Options ip;
+  ip.method = fact::sdp::Method::interior_point;
+  const fact::sdp::Result reference = fact::sdp::solve(C, 2, ip);
+  ASSERT_TRUE(reference.certified()) << reference.reason;
+  EXPECT_NEAR(r.objective, reference.objective, 1e-9 * std::abs(reference.objective));
+  EXPECT_LE(r.rel_gap, 1e-9);
 }
 
 // The warm start from the staircase's rank-1 factor (the path solve() takes at N ≥ 27): strictly

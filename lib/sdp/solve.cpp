@@ -73,6 +73,13 @@ constexpr int kComplexPolishSteps = 4;
 constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
+// When Newton from that factor stops at a saddle before its kComplexHandoffSteps, it starts again
+// from X's factor down to kHandoffWiderCutoff. On the 5 such instances of a tight sweep (N = 27 …
+// 100, 8 seeds, noise 0.02 / 0.05 / 0.1: 192 instances) an escape from the saddle instead (the
+// staircase's, along S's lowest eigenvector) crawled and certified none within 10 steps; the wider
+// factor certified 4, and the interior point resumed on 3 instances instead of 7 (BENCHMARKS.md,
+// session 48).
+constexpr double kHandoffWiderCutoff = 1e-3;
 // complex_polish's Newton keeps its shift at most kPolishShiftPerGradient·‖grad‖ after the first
 // step (complex_newton's shift_per_gradient; at rank ≥ 2, the Schur-form path). The
 // lower-10×-a-step rule alone kept the shift above 0.1·‖grad‖ from the second step on:
@@ -421,9 +428,10 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o, Stages& sta
 // (complex form only, H = hermitian_of(C)) for at most max_steps steps, its shift capped by the
 // gradient (kPolishShiftPerGradient).
 Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int max_steps,
-                         const Options& o, Stages& stages) {
+                         const Options& o, Stages& stages, int* steps_taken = nullptr) {
   const Clock::time_point start = Clock::now();
   const int steps = detail::complex_newton(H, Y, max_steps, 1e-12, false, 0.0, kPolishShiftPerGradient);
+  if (steps_taken) *steps_taken = steps;
   Candidate c = candidate_of(C, detail::complex_outcome(H, std::move(Y), steps, false), Method::interior_point);
   record_stage(stages, "complex_newton", steps, start, outcome_of(c, o));
   return c;
@@ -469,9 +477,21 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   // The warm start stalled (4 of 240 sweep instances, N = 27 … 100, near a relative gap of 1): cold.
   if (warm && !ip.handed_off && !ip.converged) primal_dual(kComplexHandoffGap, nullptr);
   if (ip.handed_off) {
-    const Candidate handed =
-        complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), kComplexHandoffSteps, o, stages);
+    int steps = 0;
+    Candidate handed = complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), kComplexHandoffSteps,
+                                      o, stages, &steps);
     if (is_certified(handed, o)) return handed;
+    // Newton stopped short of its cap at a saddle (S has a negative eigenvalue): the factor's rank
+    // was short of the optimum's, X's next eigenvalue just under the cutoff (7.8e-2 against 46 on
+    // one at N = 48). Newton again from X's factor at kHandoffWiderCutoff, when that has more
+    // columns.
+    if (steps < kComplexHandoffSteps && handed.cert.min_eig < -o.psd_tol) {
+      Eigen::MatrixXcd wider = detail::complex_factor(ip.X, kHandoffWiderCutoff);
+      if (wider.cols() > handed.Y.cols() / 2) {
+        handed = complex_polish(C, H, std::move(wider), kComplexHandoffSteps, o, stages);
+        if (is_certified(handed, o)) return handed;
+      }
+    }
     primal_dual(0.0, &ip);  // resumed where it handed off, to convergence
   }
   Candidate c = candidate_of(
