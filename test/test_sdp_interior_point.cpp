@@ -975,14 +975,15 @@ TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
   EXPECT_EQ(mehrotra_centring(1.0, std::nan(""), 3), 0.0);
 }
 
-// SpdSolver on both of its paths (cholesky_lower to 64 rows, right-looking below 24 and by columns
-// from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for A = B Bᵀ + n I, with
-// x aliasing b; false and a NaN solution for an indefinite A.
-TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
+// SpdSolver on each of its paths (L D Lᵀ to 12 rows; cholesky_lower to 64 rows, right-looking
+// below 24 and by columns from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for
+// A = B Bᵀ + n I, with x aliasing b; false and a NaN solution for an indefinite A, one whose every
+// pivot is negative and one with a single eigenvalue just below zero.
+TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   fact::sdp::detail::SpdSolver solver(3);
-  for (int n : {1, 10, 23, 24, 64, 65, 100, 7}) {
+  for (int n : {1, 2, 5, 12, 13, 23, 24, 64, 65, 100, 7}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);
@@ -995,6 +996,11 @@ TEST(SdpKernels, SpdSolverSolvesOnBothPathsAndRefusesIndefiniteMatrices) {
     EXPECT_FALSE(solver.factor(indefinite));
     solver.solve(b, x);
     EXPECT_TRUE(x.array().isNaN().all());
+    const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues()[0];
+    EXPECT_FALSE(solver.factor(A - 1.01 * lowest * Eigen::MatrixXd::Identity(n, n)));
+    ASSERT_TRUE(solver.factor(A - 0.99 * lowest * Eigen::MatrixXd::Identity(n, n)));
+    solver.solve(b, x);
+    EXPECT_TRUE(x.allFinite());
   }
 }
 

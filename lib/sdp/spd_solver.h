@@ -1,6 +1,8 @@
 // Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle
-// read). Up to kSmallSpdSize rows plain loops (cholesky_lower and two substitutions); above it Eigen's
-// blocked kernel in place (cholesky_in_place) and its triangular solves. Eigen::LLT also computes
+// read). Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops;
+// up to kSmallSpdSize the Cholesky factor by plain loops (cholesky_lower); both with two
+// substitutions. Above it Eigen's blocked kernel in place (cholesky_in_place) and its triangular
+// solves. Eigen::LLT also computes
 // a condition estimate (the matrix's L1 norm) nothing reads: at the Newton systems' and Schur
 // complements' usual sizes (6 … 48 unknowns) 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3
 // (BENCHMARKS.md, session 23), and a quarter of the factorisation of the real interior point's
@@ -12,6 +14,11 @@
 namespace fact::sdp::detail {
 
 constexpr Eigen::Index kSmallSpdSize = 64;
+// L D Lᵀ has no square root on the path from one column's pivot to the next (a Cholesky column
+// waits on its pivot's root, then on the division by it): n = 5 / 8 / 12 took 57 / 117 / 199 ns a
+// factorisation against 32 / 70 / 147 ns; from 16 rows the Cholesky loops measured as fast or
+// faster (up to 2× at 32; BENCHMARKS.md, session 48).
+constexpr Eigen::Index kLdlMaxSize = 12;
 
 class SpdSolver {
  public:
@@ -23,10 +30,11 @@ class SpdSolver {
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
 
  private:
-  bool small_ = true;
+  enum class Path { ldl, loops, blocked };
+  Path path_ = Path::loops;
   bool factored_ = false;
-  Eigen::MatrixXd L_;                 // the factor, lower triangle, n × n
-  Eigen::VectorXd inverse_diagonal_;  // 1 / L_ii on the small path, n
+  Eigen::MatrixXd L_;                 // the factor, lower triangle, n × n (L D Lᵀ: below the unit diagonal)
+  Eigen::VectorXd inverse_diagonal_;  // 1 / D_ii (L D Lᵀ) or 1 / L_ii (the loops), n
 };
 
 }  // namespace fact::sdp::detail
