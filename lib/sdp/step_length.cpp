@@ -240,19 +240,22 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A) {
   using Complex = std::complex<double>;
   const Eigen::Index n = A.rows();
-  for (Eigen::Index k = 0; k < n; ++k) {
+  for (Eigen::Index k = 0; k < n; ++k) {  // L D Lᴴ, column k of A D_kk times L's
     const double pivot = A(k, k).real();
     if (!(pivot > 0)) return false;
-    const double root = std::sqrt(pivot);
-    Complex* __restrict lk = &A(0, k);
-    lk[k] = root;
-    const double scale = 1.0 / root;
-    for (Eigen::Index i = k + 1; i < n; ++i) lk[i] *= scale;
+    const double reciprocal = 1.0 / pivot;
+    const Complex* __restrict lk = &A(0, k);
     for (Eigen::Index j = k + 1; j < n; ++j) {
       Complex* __restrict lj = &A(0, j);
-      const Complex factor = std::conj(lk[j]);
+      const Complex factor = std::conj(lk[j]) * reciprocal;
       for (Eigen::Index i = j; i < n; ++i) lj[i] -= lk[i] * factor;
     }
+  }
+  for (Eigen::Index k = 0; k < n; ++k) {  // L D^½: column k over √D_kk
+    const double root = std::sqrt(A(k, k).real()), scale = 1.0 / root;
+    Complex* __restrict lk = &A(0, k);
+    lk[k] = root;
+    for (Eigen::Index i = k + 1; i < n; ++i) lk[i] *= scale;
   }
   return true;
 }
