@@ -171,7 +171,7 @@ constexpr Eigen::Index kComplexCholeskyPanel = 24;
 // column k scaled by 1/√D_kk at the end (the roots independent of each other): n = 5 / 12 / 32
 // took 79 / 258 / 2045 ns with column k scaled by its root before the update, 53 / 219 / 1955 ns
 // this way (BENCHMARKS.md, session 48). False at the first pivot that is not positive (a NaN one
-// too).
+// too); a pivot below about 5.6e-309, whose reciprocal overflows, fails through the NaN it leaves.
 bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A);
 
 // The same by panels of kComplexCholeskyPanel columns, right-looking: the panel's diagonal block
@@ -647,7 +647,7 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 // X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by plain loops: Eigen's lazy complex
 // product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md, session 39). X is resized.
 void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
-// C = A B for A N × N and B N × p, p small (the factor's rank), by Eigen's lazy (coefficient-wise)
+// C = A B for A N × N and B N × p, p small (the factor's rank), by Eigen's lazy (coefficient-based)
 // product. Its general product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
 // session 39); the loops that replaced it then (column k of C as the sum of A's columns weighted
 // by column k of B) loaded each complex weight as two doubles and read them back as one vector, a

@@ -74,11 +74,11 @@ constexpr double kComplexHandoffGap = 1e-3;
 constexpr double kComplexHandoffCutoff = 1e-2;
 constexpr int kComplexHandoffSteps = 10;
 // When Newton from that factor stops at a saddle before its kComplexHandoffSteps, it starts again
-// from X's factor down to kHandoffWiderCutoff. On the 5 such instances of a tight sweep (N = 27 …
-// 100, 8 seeds, noise 0.02 / 0.05 / 0.1: 192 instances) an escape from the saddle instead (the
-// staircase's, along S's lowest eigenvector) crawled and certified none within 10 steps; the wider
-// factor certified 4, and the interior point resumed on 3 instances instead of 7 (BENCHMARKS.md,
-// session 48).
+// from X's factor down to kHandoffWiderCutoff (pivoted Cholesky until the residual diagonal is
+// below it). On the 5 such instances of a tight sweep (N = 27 … 100, 8 seeds, noise 0.02 / 0.05 /
+// 0.1: 192 instances) an escape from the saddle instead (the staircase's, along S's lowest
+// eigenvector) crawled and certified none within 10 steps; the wider factor certified 4, and the
+// interior point resumed on 3 instances instead of 7 (BENCHMARKS.md, session 48).
 constexpr double kHandoffWiderCutoff = 1e-3;
 // complex_polish's Newton keeps its shift at most kPolishShiftPerGradient·‖grad‖ after the first
 // step (complex_newton's shift_per_gradient; at rank ≥ 2, the Schur-form path). The
@@ -426,7 +426,7 @@ Candidate from_complex_low_rank(const Eigen::MatrixXd& C, Options o, Stages& sta
 
 // Newton in complex arithmetic from a factor Y (N × p, unit rows) of an interior point's X
 // (complex form only, H = hermitian_of(C)) for at most max_steps steps, its shift capped by the
-// gradient (kPolishShiftPerGradient).
+// gradient (kPolishShiftPerGradient); the steps it took into *steps_taken when given.
 Candidate complex_polish(const Eigen::MatrixXd& C, const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int max_steps,
                          const Options& o, Stages& stages, int* steps_taken = nullptr) {
   const Clock::time_point start = Clock::now();
@@ -478,16 +478,17 @@ Candidate from_complex_interior_point(const Eigen::MatrixXd& C, const Options& o
   if (warm && !ip.handed_off && !ip.converged) primal_dual(kComplexHandoffGap, nullptr);
   if (ip.handed_off) {
     int steps = 0;
-    Candidate handed = complex_polish(C, H, detail::complex_factor(ip.X, kComplexHandoffCutoff), kComplexHandoffSteps,
-                                      o, stages, &steps);
+    Eigen::MatrixXcd factor = detail::complex_factor(ip.X, kComplexHandoffCutoff);  // N × p
+    const Eigen::Index rank = factor.cols();
+    Candidate handed = complex_polish(C, H, std::move(factor), kComplexHandoffSteps, o, stages, &steps);
     if (is_certified(handed, o)) return handed;
     // Newton stopped short of its cap at a saddle (S has a negative eigenvalue): the factor's rank
-    // was short of the optimum's, X's next eigenvalue just under the cutoff (7.8e-2 against 46 on
-    // one at N = 48). Newton again from X's factor at kHandoffWiderCutoff, when that has more
-    // columns.
+    // was short of the optimum's, the pivoted Cholesky's residual diagonal just under the cutoff
+    // (on one instance at N = 48, X's third eigenvalue 7.8e-2 with a unit diagonal). Newton again
+    // from X's factor down to kHandoffWiderCutoff, when that has more columns.
     if (steps < kComplexHandoffSteps && handed.cert.min_eig < -o.psd_tol) {
-      Eigen::MatrixXcd wider = detail::complex_factor(ip.X, kHandoffWiderCutoff);
-      if (wider.cols() > handed.Y.cols() / 2) {
+      Eigen::MatrixXcd wider = detail::complex_factor(ip.X, kHandoffWiderCutoff);  // N × p'
+      if (wider.cols() > rank) {
         handed = complex_polish(C, H, std::move(wider), kComplexHandoffSteps, o, stages);
         if (is_certified(handed, o)) return handed;
       }

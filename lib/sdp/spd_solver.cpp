@@ -15,7 +15,9 @@ namespace {
 
 // A = L D Lᵀ into L (n × n: L's strictly lower triangle; D's reciprocals into inverse_diagonal,
 // n), right-looking: column k's multiples of the pivot's row come off the trailing columns, then
-// it is divided by the pivot. False when a pivot is not positive (A not positive definite).
+// it is divided by the pivot. False when a pivot is not positive (A not positive definite) or not
+// finite (an infinite one would leave D⁻¹ = 0 and a finite x; the loops path takes it as it did
+// before, session 48's review).
 bool ldl_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L, Eigen::VectorXd& inverse_diagonal) {
   const Eigen::Index n = A.rows();
   L.resize(n, n);
@@ -24,7 +26,7 @@ bool ldl_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L, Eigen::VectorXd& in
     std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
   for (Eigen::Index k = 0; k < n; ++k) {
     const double pivot = L(k, k);
-    if (!(pivot > 0)) return false;
+    if (!(pivot > 0 && pivot <= std::numeric_limits<double>::max())) return false;
     const double reciprocal = 1.0 / pivot;
     inverse_diagonal[k] = reciprocal;
     double* __restrict lk = &L(0, k);
@@ -71,11 +73,14 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   if (path_ == Path::ldl) {
     for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L (unit diagonal)
       const double* l = &L_(0, k);
-      for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= x[k] * l[i];
+      const double xk = x[k];
+      for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
     }
     x.array() *= inverse_diagonal_.array();  // D z = y
-    for (Eigen::Index k = n - 1; k >= 0; --k)  // Lᵀ x = z, by columns of Lᵀ as below
-      for (Eigen::Index i = 0; i < k; ++i) x[i] -= x[k] * L_(k, i);
+    for (Eigen::Index k = n - 1; k >= 0; --k) {  // Lᵀ x = z, by columns of Lᵀ as below
+      const double xk = x[k];
+      for (Eigen::Index i = 0; i < k; ++i) x[i] -= xk * L_(k, i);
+    }
     return;
   }
   for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L

@@ -1,7 +1,7 @@
 // Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle
-// read). Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops;
-// up to kSmallSpdSize the Cholesky factor by plain loops (cholesky_lower); both with two
-// substitutions. Above it Eigen's blocked kernel in place (cholesky_in_place) and its triangular
+// read). Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops,
+// solved by two substitutions and a division by D between them; up to kSmallSpdSize the Cholesky
+// factor by plain loops (cholesky_lower) and two substitutions. Above it Eigen's blocked kernel in place (cholesky_in_place) and its triangular
 // solves. Eigen::LLT also computes
 // a condition estimate (the matrix's L1 norm) nothing reads: at the Newton systems' and Schur
 // complements' usual sizes (6 … 48 unknowns) 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3
@@ -33,7 +33,8 @@ class SpdSolver {
   enum class Path { ldl, loops, blocked };
   Path path_ = Path::loops;
   bool factored_ = false;
-  Eigen::MatrixXd L_;                 // the factor, lower triangle, n × n (L D Lᵀ: below the unit diagonal)
+  Eigen::MatrixXd L_;                 // the factor, lower triangle, n × n (L D Lᵀ: L below the unit
+                                      // diagonal, D on it, unread); the upper triangle is stale
   Eigen::VectorXd inverse_diagonal_;  // 1 / D_ii (L D Lᵀ) or 1 / L_ii (the loops), n
 };
 

@@ -240,7 +240,7 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A) {
   using Complex = std::complex<double>;
   const Eigen::Index n = A.rows();
-  for (Eigen::Index k = 0; k < n; ++k) {  // L D Lᴴ, column k of A D_kk times L's
+  for (Eigen::Index k = 0; k < n; ++k) {  // L D Lᴴ: column k keeps D_kk·L(:, k) until the scaling below
     const double pivot = A(k, k).real();
     if (!(pivot > 0)) return false;
     const double reciprocal = 1.0 / pivot;
@@ -277,10 +277,10 @@ namespace {
 
 // Below this size a real diagonal block of L is inverted directly (invert_lower_padded); above it
 // the recursion's matrix products, which Eigen vectorises far better than its triangular solves
-// (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15).
-// Real: 24 measured best with substitution (BENCHMARKS.md, session 25; the padded kernel measured
-// faster than the recursion up to 32 rows too, but not at 48, session 28). A complex L⁻¹ of up to
-// kSplitInverseMaxSize rows goes by invert_complex_lower_padded instead (no recursion).
+// (complex, N = 100, AVX-512: 0.06 ms against 0.73 ms for L.solve(I), BENCHMARKS.md, session 15;
+// 24 measured best with substitution, session 25; the padded kernel measured faster than the
+// recursion up to 32 rows too, but not at 48, session 28). A complex L⁻¹ of up to
+// kSplitInverseMaxSize rows goes by invert_complex_lower_padded, without recursion.
 constexpr Eigen::Index kInverseBlock = 24;
 constexpr Eigen::Index kSplitInverseMaxSize = 32;
 // Above kSplitInverseMaxSize a complex L⁻¹ goes by panels (invert_lower_by_panels) of
@@ -296,8 +296,8 @@ constexpr Eigen::Index kInversePanel = 24;
 
 // Real L⁻¹ for n ≤ P rows on P × P copies fixed at compile time. Row k of L⁻¹ is final once
 // divided by L_kk; its multiples are then taken off the rows below in every column at once, whole
-// P-vectors that do not wait on each other, where the substitution column by column (below) waits
-// on each x_k in turn: n = 10 / 16 / 24 0.29 / 0.80 / 1.94 µs → 0.19 / 0.27 / 0.64 µs
+// P-vectors that do not wait on each other, where a substitution column by column waits on each
+// x_k in turn: n = 10 / 16 / 24 0.29 / 0.80 / 1.94 µs → 0.19 / 0.27 / 0.64 µs
 // (BENCHMARKS.md, session 28).
 template <int P>
 void invert_lower_padded(const Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>& L,
@@ -373,6 +373,8 @@ void invert_complex_lower_padded(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eig
 // inlined, as invert_lower_small.
 EIGEN_DONT_INLINE void invert_complex_lower_small(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>>& L,
                                                   Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> inverse) {
+  static_assert(kSplitInverseMaxSize <= 32 && kInversePanel <= kSplitInverseMaxSize, "a block larger than P = 32");
+  eigen_assert(L.rows() <= kSplitInverseMaxSize);
   switch ((L.rows() + 3) / 4) {
     case 0:
     case 1: return invert_complex_lower_padded<4>(L, inverse);
@@ -382,7 +384,7 @@ EIGEN_DONT_INLINE void invert_complex_lower_small(const Eigen::Ref<const Eigen::
     case 5: return invert_complex_lower_padded<20>(L, inverse);
     case 6: return invert_complex_lower_padded<24>(L, inverse);
     case 7: return invert_complex_lower_padded<28>(L, inverse);
-    default: return invert_complex_lower_padded<32>(L, inverse);
+    default: return invert_complex_lower_padded<32>(L, inverse);  // 29 … 32 rows
   }
 }
 
@@ -507,12 +509,13 @@ void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
 
 namespace {
 
-// Complex L⁻¹ (n × n) by panels of `width` columns from the last one up (LAPACK's trtri order):
+// Complex L⁻¹ (n × n) by panels of kInversePanel columns from the last one up (LAPACK's trtri order):
 // with the rows below panel j already inverted (X₂₂ = L₂₂⁻¹, lower triangular), the panel's
 // diagonal block is X₁₁ = L₁₁⁻¹ (invert_complex_lower_small) and the block below it
 // X₂₁ = −X₂₂ L₂₁ X₁₁, two products with a triangular operand. Eigen's complex kernels take them as they are (the
 // three-product form's splitting costs more than it saves on panels this narrow).
-void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse, Eigen::Index width) {
+void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
+  const Eigen::Index width = kInversePanel;
   const Eigen::Index n = L.rows();
   inverse.setZero();
   Eigen::MatrixXcd product(n, width);  // X₂₂ L₂₁, (rows below the panel) × width
@@ -532,7 +535,7 @@ void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
   const Eigen::Index n = L.rows();
   inverse.resize(n, n);
   if (n <= kSplitInverseMaxSize) return invert_complex_lower_small(L, inverse);
-  invert_lower_by_panels(L, inverse, kInversePanel);
+  invert_lower_by_panels(L, inverse);
 }
 
 StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}

@@ -59,10 +59,10 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // L⁻¹ for a lower-triangular L with a real positive diagonal (a Cholesky factor, n × n, upper
-// triangle ignored), written into inverse (n × n, lower triangular, upper part zero), by
-// recursive 2 × 2 blocking: matrix products above 24 × 24 blocks (8 × 8 complex); below, real
-// blocks on padded fixed-size copies (every column at once), complex ones by forward substitution.
-// A complex L of 32 rows or more goes by panels of 8 or 16 columns from the last one up instead.
+// triangle ignored), written into inverse (n × n, lower triangular, upper part zero). Real: by
+// recursive 2 × 2 blocking, matrix products above 24 × 24 blocks and the blocks on padded
+// fixed-size copies (every column at once). Complex: up to 32 rows on split real and imaginary
+// padded copies, above it by panels of 24 columns from the last one up.
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
