@@ -14,13 +14,13 @@
 // Δy are kept; X is formed once, at the end.
 //
 // Against the primal–dual interior point (interior_point.cpp) an iteration has no direction
-// products P·W, no primal factor and one step length instead of four (up to n = 48 a few
-// Cholesky tests on a grid, step_length.h): Z⁻¹ by its factor, the m × m Hessian and its
-// Cholesky factor (m = 3N for d = 2, the largest piece), the primal test and the dual step's
-// test. From the cold start it takes 12–18 iterations to a relative gap of 1e-5 on random
-// full-rank C (N = 8 … 100) against the primal–dual method's 8–12, at about half the cost each
-// (BENCHMARKS.md, session 38). Where the optimum is near 0 (the relative gap's floor of 1e-4 then
-// asks for an absolute gap of 1e-9) it needed 26–35 iterations against 13, from the rank-d attempt's warm start or from the cold one.
+// products P·W, no primal factor and one step length instead of four (up to n = 48 a few Cholesky
+// tests on a grid, step_length.h): Z⁻¹ by its factor, the m × m Hessian and its Cholesky factor (m
+// = 3N for d = 2, the largest piece), the primal test and the dual step's test. From the cold start
+// it takes 12–18 iterations to a relative gap of 1e-5 on random full-rank C (N = 8 … 100) against
+// the primal–dual method's 8–12, at about half the cost each (BENCHMARKS.md, session 38). Where the
+// optimum is near 0 (the relative gap's floor of 1e-4 then asks for an absolute gap of 1e-9) it
+// needed 26–35 iterations against 13, from the rank-d attempt's warm start or from the cold one.
 #include <algorithm>
 #include <cmath>
 #include <string>

@@ -1,12 +1,12 @@
-// Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle
-// read). Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops,
-// solved by two substitutions and a division by D between them; up to kSmallSpdSize the Cholesky
-// factor by plain loops (cholesky_lower) and two substitutions. Above it Eigen's blocked kernel in place (cholesky_in_place) and its triangular
-// solves. Eigen::LLT also computes
-// a condition estimate (the matrix's L1 norm) nothing reads: at the Newton systems' and Schur
-// complements' usual sizes (6 … 48 unknowns) 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3
-// (BENCHMARKS.md, session 23), and a quarter of the factorisation of the real interior point's
-// Schur complement at N = 100 (300 × 300: 0.27 against 0.20 ms, session 27).
+// Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle read).
+// Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops, solved by
+// two substitutions and a division by D between them; up to kSmallSpdSize the Cholesky factor by
+// plain loops (cholesky_lower) and two substitutions. Above it Eigen's blocked kernel in place
+// (cholesky_in_place) and its triangular solves. Eigen::LLT also computes a condition estimate (the
+// matrix's L1 norm) nothing reads: at the Newton systems' and Schur complements' usual sizes (6 …
+// 48 unknowns) 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3 (BENCHMARKS.md, session 23),
+// and a quarter of the factorisation of the real interior point's Schur complement at N = 100 (300
+// × 300: 0.27 against 0.20 ms, session 27).
 #pragma once
 
 #include <Eigen/Dense>

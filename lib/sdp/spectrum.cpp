@@ -1,11 +1,12 @@
 // Eigenvalues, for the certificates (S = C − Λ, real n × n, or S = H − diag μ, complex N × N) and
-// the Lanczos matrices' lowest eigenvalue (step_length.cpp's estimates): Householder reduction to
-// a real symmetric tridiagonal matrix, then the root-free QL iteration of Pal, Walker and Kahan
-// (EISPACK's tqlrat) on the squares of its off-diagonal. Eigen's SelfAdjointEigenSolver spent 1–3 µs of an 8-drone solve's
-// 14 µs in its tridiagonal QR, whose Givens rotations take a square root each (BENCHMARKS.md,
-// session 17). The few eigenvectors the staircases need (their spectral start and their escapes
-// from saddles) come from inverse iteration on the tridiagonal matrix at those eigenvalues, carried
-// back through the stored reflectors, instead of a full decomposition with vectors.
+// the Lanczos matrices' lowest eigenvalue (step_length.cpp's estimates): Householder reduction to a
+// real symmetric tridiagonal matrix, then the root-free QL iteration of Pal, Walker and Kahan
+// (EISPACK's tqlrat) on the squares of its off-diagonal. Eigen's SelfAdjointEigenSolver spent 1–3
+// µs of an 8-drone solve's 14 µs in its tridiagonal QR, whose Givens rotations take a square root
+// each (BENCHMARKS.md, session 17). The few eigenvectors the staircases need (their spectral start
+// and their escapes from saddles) come from inverse iteration on the tridiagonal matrix at those
+// eigenvalues, carried back through the stored reflectors, instead of a full decomposition with
+// vectors.
 #include <cmath>
 #include <complex>
 #include <limits>

@@ -509,10 +509,10 @@ void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {
 
 namespace {
 
-// Complex L⁻¹ (n × n) by panels of kInversePanel columns from the last one up (LAPACK's trtri order):
-// with the rows below panel j already inverted (X₂₂ = L₂₂⁻¹, lower triangular), the panel's
-// diagonal block is X₁₁ = L₁₁⁻¹ (invert_complex_lower_small) and the block below it
-// X₂₁ = −X₂₂ L₂₁ X₁₁, two products with a triangular operand. Eigen's complex kernels take them as they are (the
+// Complex L⁻¹ (n × n) by panels of kInversePanel columns from the last one up (LAPACK's trtri
+// order): with the rows below panel j already inverted (X₂₂ = L₂₂⁻¹, lower triangular), the panel's
+// diagonal block is X₁₁ = L₁₁⁻¹ (invert_complex_lower_small) and the block below it X₂₁ = −X₂₂ L₂₁
+// X₁₁, two products with a triangular operand. Eigen's complex kernels take them as they are (the
 // three-product form's splitting costs more than it saves on panels this narrow).
 void invert_lower_by_panels(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse) {
   const Eigen::Index width = kInversePanel;
