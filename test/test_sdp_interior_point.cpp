@@ -976,15 +976,17 @@ TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
   EXPECT_EQ(mehrotra_centring(1.0, std::nan(""), 3), 0.0);
 }
 
-// SpdSolver on each of its paths (L D Lᵀ to 12 rows; cholesky_lower to 64 rows, right-looking
-// below 24 and by columns from 24; Eigen's blocked kernel in place above; and back): x = A⁻¹ b for
-// A = B Bᵀ + n I, with x aliasing b; false and a NaN solution for an indefinite A, one whose every
-// pivot is negative and one with a single eigenvalue just below zero.
+// SpdSolver on each of its paths (L D Lᵀ to 12 rows, padded to 4, 8 or 12; cholesky_lower to 64
+// rows, right-looking below 24 and by columns from 24; Eigen's blocked kernel in place above; and
+// back, so that a smaller L D Lᵀ system follows a larger one in the same padding): x = A⁻¹ b for
+// A = B Bᵀ + n I, with x aliasing b, and the same x with A's strict upper triangle NaN (only the
+// lower one is read); false and a NaN solution for an indefinite A, one whose every pivot is
+// negative and one with a single eigenvalue just below zero.
 TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   fact::sdp::detail::SpdSolver solver(3);
-  for (int n : {1, 2, 5, 12, 13, 23, 24, 64, 65, 100, 7}) {
+  for (int n : {1, 2, 4, 5, 8, 9, 12, 13, 23, 24, 64, 65, 100, 7, 3, 11}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);
@@ -993,6 +995,12 @@ TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
     Eigen::VectorXd x = b;
     solver.solve(x, x);  // aliased
     EXPECT_LT((A * x - b).cwiseAbs().maxCoeff(), 1e-12 * b.cwiseAbs().maxCoeff() * n);
+    Eigen::MatrixXd lower_only = A;  // n × n
+    lower_only.triangularView<Eigen::StrictlyUpper>().setConstant(std::numeric_limits<double>::quiet_NaN());
+    ASSERT_TRUE(solver.factor(lower_only));
+    Eigen::VectorXd from_lower;  // n
+    solver.solve(b, from_lower);
+    EXPECT_LT((A * from_lower - b).cwiseAbs().maxCoeff(), 1e-12 * b.cwiseAbs().maxCoeff() * n);
     const Eigen::MatrixXd indefinite = A - 2.0 * A.diagonal().maxCoeff() * Eigen::MatrixXd::Identity(n, n);
     EXPECT_FALSE(solver.factor(indefinite));
     solver.solve(b, x);

@@ -13,31 +13,57 @@ SpdSolver::SpdSolver(Eigen::Index n) : L_(n, n) {}
 
 namespace {
 
-// A = L D Lᵀ into L (n × n: L's strictly lower triangle; D's reciprocals into inverse_diagonal,
-// n), right-looking: column k's multiples of the pivot's row come off the trailing columns, then
-// it is divided by the pivot. False when a pivot is not positive (A not positive definite) or not
-// finite (an infinite one would leave D⁻¹ = 0 and a finite x; the loops path takes it as it did
-// before, session 48's review).
-bool ldl_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L, Eigen::VectorXd& inverse_diagonal) {
-  const Eigen::Index n = A.rows();
-  L.resize(n, n);
-  inverse_diagonal.resize(n);
-  for (Eigen::Index j = 0; j < n; ++j)  // the lower triangle of A, column by column
-    std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double pivot = L(k, k);
+// A = L D Lᵀ (A n × n, n ≤ P, lower triangle read) into a (P × P, column-major, leading dimension
+// P): right-looking, column k's multiples of the pivot's row come off the trailing columns, then it
+// is divided by the pivot and everything else in its padded column set to zero; D's reciprocals
+// into inverse (P, zeros past n). Nothing but zeros is ever written above a's diagonal, so the
+// columns from n on, stale from a larger system, hold zeros in the first n rows: the substitutions
+// read only L's strictly lower n × n triangle and zeros, and the padding lanes stay at zero. False
+// when a pivot is not positive (A not positive definite) or not finite (an infinite one would leave
+// D⁻¹ = 0 and a finite x; the loops path takes it, session 48's review).
+template <int P>
+bool ldl_padded(const Eigen::MatrixXd& A, double* a, double* inverse) {
+  const int n = static_cast<int>(A.rows());
+  for (int j = 0; j < n; ++j) std::copy(&A(j, j), &A(0, j) + n, a + j * P + j);
+  for (int k = 0; k < n; ++k) {
+    double* __restrict ak = a + k * P;
+    const double pivot = ak[k];
     if (!(pivot > 0 && pivot <= std::numeric_limits<double>::max())) return false;
     const double reciprocal = 1.0 / pivot;
-    inverse_diagonal[k] = reciprocal;
-    double* __restrict lk = &L(0, k);
-    for (Eigen::Index j = k + 1; j < n; ++j) {
-      double* __restrict lj = &L(0, j);
-      const double factor = lk[j] * reciprocal;
-      for (Eigen::Index i = j; i < n; ++i) lj[i] -= lk[i] * factor;
+    inverse[k] = reciprocal;
+    for (int j = k + 1; j < n; ++j) {
+      double* __restrict aj = a + j * P;
+      const double factor = ak[j] * reciprocal;
+      for (int i = j; i < n; ++i) aj[i] -= ak[i] * factor;
     }
-    for (Eigen::Index i = k + 1; i < n; ++i) lk[i] *= reciprocal;
+    for (int i = 0; i < P; ++i) ak[i] = i > k && i < n ? ak[i] * reciprocal : 0.0;  // the whole column
   }
+  std::fill(inverse + n, inverse + P, 0.0);
   return true;
+}
+
+// x = A⁻¹ b (b: n entries) from ldl_padded's a and inverse, on a zero-padded P-vector: L z = b by
+// columns of L, then D⁻¹, then Lᵀ x = y by columns of Lᵀ (rows of L, read with stride P). The
+// zeros on and above L's diagonal leave the finished entries unchanged, so every step is a whole
+// P-vector update with no remainder loop: n = 5 / 8 / 12 took 32 / 57 / 91 ns a solve by loops over
+// the remaining rows against 14 / 25 / 52 ns (BENCHMARKS.md, session 49).
+template <int P>
+void solve_padded(const double* a, const double* inverse, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  const int n = static_cast<int>(b.size());
+  alignas(64) double y[P];
+  for (int i = 0; i < P; ++i) y[i] = i < n ? b[i] : 0.0;
+  for (int k = 0; k + 1 < n; ++k) {
+    const double yk = y[k];
+    const double* l = a + k * P;
+    for (int i = 0; i < P; ++i) y[i] -= yk * l[i];
+  }
+  for (int i = 0; i < P; ++i) y[i] *= inverse[i];
+  for (int k = n - 1; k > 0; --k) {
+    const double yk = y[k];
+    for (int i = 0; i < P; ++i) y[i] -= yk * a[i * P + k];
+  }
+  x.resize(n);
+  std::copy(y, y + n, x.data());
 }
 
 }  // namespace
@@ -46,7 +72,10 @@ bool SpdSolver::factor(const Eigen::MatrixXd& A) {
   const Eigen::Index n = A.rows();
   path_ = n <= kLdlMaxSize ? Path::ldl : n <= kSmallSpdSize ? Path::loops : Path::blocked;
   if (path_ == Path::ldl) {
-    factored_ = ldl_lower(A, L_, inverse_diagonal_);
+    padded_size_ = n <= 4 ? 4 : n <= 8 ? 8 : 12;
+    factored_ = padded_size_ == 4    ? ldl_padded<4>(A, padded_.data(), padded_inverse_.data())
+                : padded_size_ == 8 ? ldl_padded<8>(A, padded_.data(), padded_inverse_.data())
+                                    : ldl_padded<12>(A, padded_.data(), padded_inverse_.data());
   } else if (path_ == Path::blocked) {
     L_ = A;
     factored_ = cholesky_in_place(L_);
@@ -63,6 +92,11 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     x.setConstant(b.size(), std::numeric_limits<double>::quiet_NaN());
     return;
   }
+  if (path_ == Path::ldl) {
+    if (padded_size_ == 4) return solve_padded<4>(padded_.data(), padded_inverse_.data(), b, x);
+    if (padded_size_ == 8) return solve_padded<8>(padded_.data(), padded_inverse_.data(), b, x);
+    return solve_padded<12>(padded_.data(), padded_inverse_.data(), b, x);
+  }
   if (&x != &b) x = b;
   if (path_ == Path::blocked) {
     L_.triangularView<Eigen::Lower>().solveInPlace(x);
@@ -70,19 +104,6 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     return;
   }
   const Eigen::Index n = L_.rows();
-  if (path_ == Path::ldl) {
-    for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L (unit diagonal)
-      const double* l = &L_(0, k);
-      const double xk = x[k];
-      for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= xk * l[i];
-    }
-    x.array() *= inverse_diagonal_.array();  // D z = y
-    for (Eigen::Index k = n - 1; k >= 0; --k) {  // Lᵀ x = z, by columns of Lᵀ as below
-      const double xk = x[k];
-      for (Eigen::Index i = 0; i < k; ++i) x[i] -= xk * L_(k, i);
-    }
-    return;
-  }
   for (Eigen::Index k = 0; k < n; ++k) {  // L y = b, by columns of L
     const double* l = &L_(0, k);
     const double xk = x[k] * inverse_diagonal_[k];

@@ -1,6 +1,7 @@
 // Factor and solve of a symmetric positive definite system A x = b (A n × n, lower triangle read).
-// Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops, solved by
-// two substitutions and a division by D between them; up to kSmallSpdSize the Cholesky factor by
+// Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops on a
+// zero-padded copy, solved by two substitutions of whole padded columns and a division by D between
+// them; up to kSmallSpdSize the Cholesky factor by
 // plain loops (cholesky_lower) and two substitutions. Above it Eigen's blocked kernel in place
 // (cholesky_in_place) and its triangular solves. Eigen::LLT also computes a condition estimate (the
 // matrix's L1 norm) nothing reads: at the Newton systems' and Schur complements' usual sizes (6 …
@@ -8,6 +9,8 @@
 // and a quarter of the factorisation of the real interior point's Schur complement at N = 100 (300
 // × 300: 0.27 against 0.20 ms, session 27).
 #pragma once
+
+#include <array>
 
 #include <Eigen/Dense>
 
@@ -33,9 +36,16 @@ class SpdSolver {
   enum class Path { ldl, loops, blocked };
   Path path_ = Path::loops;
   bool factored_ = false;
-  Eigen::MatrixXd L_;                 // the factor, lower triangle, n × n (L D Lᵀ: L below the unit
-                                      // diagonal, D on it, unread); the upper triangle is stale
-  Eigen::VectorXd inverse_diagonal_;  // 1 / D_ii (L D Lᵀ) or 1 / L_ii (the loops), n
+  Eigen::MatrixXd L_;                 // the loops' and the blocked factor, lower triangle, n × n;
+                                      // the upper triangle is stale
+  Eigen::VectorXd inverse_diagonal_;  // 1 / L_ii (the loops), n
+  // The L D Lᵀ path: L on a P × P column-major copy (P = 4, 8 or 12, the smallest that holds n;
+  // leading dimension P), its strictly lower n × n triangle and zeros everywhere else, so that each
+  // substitution step is one whole P-vector operation with no remainder; padded_inverse_ holds
+  // 1 / D_ii, zeros past n.
+  int padded_size_ = 0;
+  alignas(64) std::array<double, kLdlMaxSize * kLdlMaxSize> padded_{};
+  alignas(64) std::array<double, kLdlMaxSize> padded_inverse_{};
 };
 
 }  // namespace fact::sdp::detail
