@@ -236,6 +236,30 @@ TEST(SdpSpectrum, LowestEigenvectorsOfMatricesThatAreAlreadyReduced) {
   expect_lowest_eigenpairs(Z, 2);
 }
 
+// With `below`, vectors only of those of the k lowest eigenvalues below it, but at least one (the
+// complex staircase's escape asks for the negative ones): a Hermitian matrix with eigenvalues −2,
+// −1, 0.5, 1, 3 in a random basis, k = 2.
+TEST(SdpSpectrum, LowestEigenvectorsOnlyBelowAThreshold) {
+  std::mt19937 rng(31);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::MatrixXcd G = hermitian_test_matrix(5, rng, gauss);
+  const Eigen::MatrixXcd Q = Eigen::HouseholderQR<Eigen::MatrixXcd>(G).householderQ();  // unitary, 5 × 5
+  Eigen::VectorXd spectrum(5);
+  spectrum << -2, -1, 0.5, 1, 3;
+  const Eigen::MatrixXcd A = Q * spectrum.cast<std::complex<double>>().asDiagonal() * Q.adjoint();
+  for (const auto& [below, columns] : {std::pair{std::numeric_limits<double>::infinity(), 2}, std::pair{0.0, 2},
+                                       std::pair{-1.5, 1}, std::pair{-5.0, 1}}) {
+    SCOPED_TRACE("below " + std::to_string(below));
+    Eigen::VectorXd eigenvalues;
+    Eigen::MatrixXcd V;
+    lowest_eigenpairs(A, 2, eigenvalues, V, below);
+    ASSERT_EQ(eigenvalues.size(), 5);
+    EXPECT_LT((eigenvalues - spectrum).cwiseAbs().maxCoeff(), 1e-13);
+    ASSERT_EQ(V.cols(), columns);
+    for (int j = 0; j < columns; ++j) EXPECT_LT((A * V.col(j) - spectrum[j] * V.col(j)).norm(), 1e-12);
+  }
+}
+
 // An eigenvalue split off from the rest by a coupling of 1e-120 (its row and column otherwise 0):
 // the inverse iteration's pivot there is that small after a row swap, and the iterate used to grow
 // until its norm overflowed and it normalised to a zero vector (review, session 28). Every vector,

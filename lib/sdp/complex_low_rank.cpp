@@ -324,7 +324,7 @@ Eigen::MatrixXcd escape(const MatrixXcd& H, const MatrixXcd& Y, const MatrixXcd&
 }  // namespace
 
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Eigen::VectorXd mu, int iterations,
-                               bool want_vectors) {
+                               bool want_vectors, double vectors_below) {
   ComplexOutcome out;
   out.Y = std::move(Y);
   out.iterations = iterations;
@@ -333,7 +333,7 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
   certificate_matrix(H, out.mu, S);
   if (want_vectors) {
     lowest_eigenpairs(S, static_cast<int>(std::min<Eigen::Index>(kMaxNewColumns, S.rows())), out.eigenvalues,
-                      out.eigenvectors);
+                      out.eigenvectors, vectors_below);
   } else {
     out.eigenvalues = eigenvalues_of(S);
   }
@@ -376,11 +376,14 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     // certify (up to rounding at the boundary, where they are computed after all), and its
     // eigenvalues alone cost a third of the full decomposition (N = 8: 1.8 against 5 µs).
     const bool will_certify = can_climb && shifted_positive_definite(H, mu, options.psd_tol);
-    ComplexOutcome out = complex_outcome(H, std::move(Y), std::move(mu), iterations, can_climb && !will_certify);
+    // (Vectors only for the eigenvalues below −psd_tol, the ones an escape follows: at N = 6 the
+    // second lowest is usually Y's own, at zero.)
+    ComplexOutcome out = complex_outcome(H, std::move(Y), std::move(mu), iterations, can_climb && !will_certify,
+                                         -options.psd_tol);
     out.certified = out.eigenvalues[0] >= -options.psd_tol;
     if (out.certified || !can_climb) return out;
     if (out.eigenvectors.size() == 0)
-      out = complex_outcome(H, std::move(out.Y), std::move(out.mu), iterations, true);
+      out = complex_outcome(H, std::move(out.Y), std::move(out.mu), iterations, true, -options.psd_tol);
     // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,
     // session 11: two save a level at N = 32 and 64 without slowing the next one).
     int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());

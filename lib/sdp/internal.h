@@ -219,9 +219,12 @@ bool positive_definite_when_shifted(Matrix S, double t) {
 // tridiagonal_eigenvalues, then inverse iteration on the tridiagonal matrix at each of the k
 // eigenvalues and the reflectors applied back (O(n²) a vector); unit vectors for A = 0; Eigen's full
 // decomposition only if the QL iteration fails or a vector comes out non-finite or not of unit
-// length. NaN eigenvalues and vectors for a non-finite A.
-void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors);
-void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors);
+// length. NaN eigenvalues and vectors for a non-finite A. With `below`, vectors only of those of
+// the k smallest eigenvalues that are below it, but at least one (n × k', 1 ≤ k' ≤ k).
+void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors,
+                       double below = std::numeric_limits<double>::infinity());
+void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors,
+                       double below = std::numeric_limits<double>::infinity());
 
 // The unit eigenvector of A's smallest eigenvalue (n × 1), as lowest_eigenpairs with k = 1 but
 // without the spectrum: λ_min by lowest_tridiagonal_eigenvalue instead of the QL iteration, which
@@ -661,16 +664,18 @@ struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
   Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
   Eigen::VectorXd eigenvalues;  // of S = H − diag(μ), ascending, N (empty: not computed)
-  Eigen::MatrixXcd eigenvectors;  // of S's lowest eigenvalues, N × min(N, 2), only when asked for
+  Eigen::MatrixXcd eigenvectors;  // of S's lowest eigenvalues, N × (1 … min(N, 2)), only when asked for
   int iterations = 0;           // Newton steps, all levels
   bool certified = false;       // λ_min(S) ≥ −psd_tol
 };
 
-// The multipliers and the spectrum of S = H − diag(μ) at Y (eigenvectors with want_vectors).
+// The multipliers and the spectrum of S = H − diag(μ) at Y; with want_vectors, eigenvectors of
+// its two lowest eigenvalues, only of those below vectors_below but at least one (the staircase's
+// escape follows the negative ones).
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors);
 // The same for given multipliers μ (the complex interior point's dual y).
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Eigen::VectorXd mu, int iterations,
-                               bool want_vectors);
+                               bool want_vectors, double vectors_below = std::numeric_limits<double>::infinity());
 
 // A complex factor (N × p, unit rows) of the Hermitian Z whose embedding is nearest to X
 // (2N × 2N, the K-average of X's blocks), by complex_factor at a cutoff of 1e-6. The interior

@@ -201,49 +201,69 @@ void tridiagonal_form(Eigen::MatrixXcd& A, Eigen::VectorXd& diagonal, Eigen::Vec
 // 1e30 a solve keeps the iterate's squared norm in range.
 constexpr double kPivotFloor = 1e-30;
 
-// Solves (T − σI) x = b in place (b becomes x) for the real symmetric tridiagonal T with diagonal
-// a (n) and off-diagonal e (n − 1), by Gaussian elimination with partial pivoting (row i and
-// i + 1 swapped when the subdiagonal entry is larger); a pivot of 0 (σ an eigenvalue to the last
-// bit) is replaced by `tiny`, which only scales x. Work vectors u0, u1, u2 (n): U's diagonal
-// and its two superdiagonals.
-void solve_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny,
-                               Eigen::VectorXd& b, Eigen::VectorXd& u0, Eigen::VectorXd& u1, Eigen::VectorXd& u2) {
+// T − σI = P L U for the real symmetric tridiagonal T with diagonal a (n) and off-diagonal e
+// (n − 1), by Gaussian elimination with partial pivoting (row i and i + 1 swapped when the
+// subdiagonal entry is larger), kept for several solves; a pivot of 0 (σ an eigenvalue to the last
+// bit) is replaced by `tiny`, which only scales a solution.
+struct ShiftedTridiagonalLU {
+  explicit ShiftedTridiagonalLU(Eigen::Index n)
+      : inverse_pivot(n), u1(n), u2(n), factor(std::max<Eigen::Index>(n - 1, 0)),
+        swapped(static_cast<std::size_t>(std::max<Eigen::Index>(n - 1, 0))) {}
+  Eigen::VectorXd inverse_pivot;  // 1 / U's diagonal (each at least kPivotFloor in magnitude), n
+  Eigen::VectorXd u1, u2;         // U's two superdiagonals, n (the last entries unused)
+  Eigen::VectorXd factor;         // the multiplier that eliminates row i + 1's entry in column i, n − 1
+  std::vector<char> swapped;      // rows i and i + 1 swapped before that elimination, n − 1
+};
+
+void factor_shifted_tridiagonal(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny,
+                                ShiftedTridiagonalLU& lu) {
   const Eigen::Index n = a.size();
+  Eigen::VectorXd& u0 = lu.inverse_pivot;  // U's diagonal, inverted at the end
   for (Eigen::Index i = 0; i < n; ++i) u0[i] = a[i] - sigma;
-  for (Eigen::Index i = 0; i + 1 < n; ++i) u1[i] = e[i];
+  for (Eigen::Index i = 0; i + 1 < n; ++i) lu.u1[i] = e[i];
   double below = n > 1 ? e[0] : 0.0;  // the entry of row i + 1 in column i, still to eliminate
   for (Eigen::Index i = 0; i + 1 < n; ++i) {
     const double next_super = i + 2 < n ? e[i + 1] : 0.0;  // row i + 1's entry in column i + 2
+    const std::size_t at = static_cast<std::size_t>(i);
     if (std::abs(u0[i]) >= std::abs(below)) {
       if (u0[i] == 0) u0[i] = tiny;
-      const double factor = below / u0[i];
-      u0[i + 1] -= factor * u1[i];
-      b[i + 1] -= factor * b[i];
-      u2[i] = 0;
+      lu.factor[i] = below / u0[i];
+      u0[i + 1] -= lu.factor[i] * lu.u1[i];
+      lu.u2[i] = 0;
+      lu.swapped[at] = 0;
     } else {  // swap rows i and i + 1
-      const double factor = u0[i] / below;
+      lu.factor[i] = u0[i] / below;
       u0[i] = below;
       const double diagonal_next = u0[i + 1];
-      u0[i + 1] = u1[i] - factor * diagonal_next;
-      u1[i] = diagonal_next;
-      u2[i] = next_super;
-      if (i + 2 < n) u1[i + 1] = -factor * next_super;
-      std::swap(b[i], b[i + 1]);
-      b[i + 1] -= factor * b[i];
+      u0[i + 1] = lu.u1[i] - lu.factor[i] * diagonal_next;
+      lu.u1[i] = diagonal_next;
+      lu.u2[i] = next_super;
+      if (i + 2 < n) lu.u1[i + 1] = -lu.factor[i] * next_super;
+      lu.swapped[at] = 1;
     }
     below = i + 2 < n ? e[i + 1] : 0.0;
   }
-  if (u0[n - 1] == 0) u0[n - 1] = tiny;
+  if (n > 0 && u0[n - 1] == 0) u0[n - 1] = tiny;
+  // A pivot below kPivotFloor counts as kPivotFloor: an eigenvalue split off by a coupling of
+  // 1e-80 … 1e-150 left a pivot that small after a row swap, and the iterate grew until its norm
+  // overflowed and normalised to zero (review, session 28). The usual last pivot, ε-sized against
+  // ‖T‖ = 1, is far above the floor, so results elsewhere do not change.
+  for (Eigen::Index i = 0; i < n; ++i)
+    u0[i] = 1.0 / (std::abs(u0[i]) < kPivotFloor ? std::copysign(kPivotFloor, u0[i]) : u0[i]);
+}
+
+// Solves (T − σI) x = b in place (b becomes x, n) with factor_shifted_tridiagonal's lu.
+void solve_shifted_tridiagonal(const ShiftedTridiagonalLU& lu, Eigen::VectorXd& b) {
+  const Eigen::Index n = b.size();
+  for (Eigen::Index i = 0; i + 1 < n; ++i) {
+    if (lu.swapped[static_cast<std::size_t>(i)]) std::swap(b[i], b[i + 1]);
+    b[i + 1] -= lu.factor[i] * b[i];
+  }
   for (Eigen::Index i = n - 1; i >= 0; --i) {
     double value = b[i];
-    if (i + 1 < n) value -= u1[i] * b[i + 1];
-    if (i + 2 < n) value -= u2[i] * b[i + 2];
-    // A pivot below kPivotFloor counts as kPivotFloor: an eigenvalue split off by a coupling of
-    // 1e-80 … 1e-150 left a pivot that small after a row swap, and the iterate grew until its norm
-    // overflowed and normalised to zero (review, session 28). The usual last pivot, ε-sized against
-    // ‖T‖ = 1, is far above the floor, so results elsewhere do not change.
-    const double pivot = std::abs(u0[i]) < kPivotFloor ? std::copysign(kPivotFloor, u0[i]) : u0[i];
-    b[i] = value / pivot;
+    if (i + 1 < n) value -= lu.u1[i] * b[i + 1];
+    if (i + 2 < n) value -= lu.u2[i] * b[i + 2];
+    b[i] = value * lu.inverse_pivot[i];
   }
 }
 
@@ -349,22 +369,27 @@ namespace {
 
 // Inverse iterations per eigenvector. From the QL eigenvalue (accurate to ε‖T‖) one iteration
 // already gives the vector to rounding unless the start is nearly orthogonal to it; the others
-// are O(n) each.
+// are O(n) each, on one factorisation of T − σI.
 constexpr int kInverseIterations = 3;
 
 // Unit eigenvector of T (diagonal a, off-diagonal e) for the eigenvalue sigma, orthogonal to the
-// columns 0 … j − 1 of found (n × k, the vectors of lower eigenvalues), into found.col(j).
+// columns 0 … j − 1 of found (n × k, the vectors of lower eigenvalues), into found.col(j); u (n)
+// and lu are work space. The start is fixed and generic: entries 1 + 0.5·frac(0.618…·(i + 1) +
+// 0.37·j) (a sine there cost 6 sin calls an eigenvector, 0.7 % of a tight N = 6 solve).
 void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny, int j,
-                             Eigen::MatrixXd& found) {
+                             Eigen::MatrixXd& found, Eigen::VectorXd& u, ShiftedTridiagonalLU& lu) {
   const Eigen::Index n = a.size();
-  Eigen::VectorXd u(n), u0(n), u1(n), u2(n);  // iterate and the elimination's work vectors
-  for (Eigen::Index i = 0; i < n; ++i) u[i] = 1.0 + 0.5 * std::sin(1.3 * i + 0.7 * j);  // fixed, generic start
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double turn = 0.6180339887498949 * static_cast<double>(i + 1) + 0.37 * j;
+    u[i] = 1.0 + 0.5 * (turn - std::floor(turn));
+  }
   const auto unit = [](Eigen::VectorXd& x) {  // (scaled first only if the squared norm overflows)
     if (std::isfinite(x.squaredNorm())) x.normalize(); else x.stableNormalize();
   };
+  factor_shifted_tridiagonal(a, e, sigma, tiny, lu);
   for (int step = 0; step < kInverseIterations; ++step) {
     unit(u);
-    solve_shifted_tridiagonal(a, e, sigma, tiny, u, u0, u1, u2);
+    solve_shifted_tridiagonal(lu, u);
     for (int pass = 0; pass < 2; ++pass)
       for (int i = 0; i < j; ++i) u -= found.col(i).dot(u) * found.col(i);
   }
@@ -374,7 +399,7 @@ void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e,
 
 template <class Matrix>
 void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eigenvalues, Matrix& vectors,
-                            bool spectrum = true) {
+                            bool spectrum = true, double below = std::numeric_limits<double>::infinity()) {
   using Scalar = typename Matrix::Scalar;
   const Eigen::Index n = original.rows();
   if (!original.allFinite()) {  // as eigenvalues_impl: a NaN spectrum, never a finite-looking one
@@ -389,10 +414,13 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   Reflectors<Scalar> kept{std::vector<double>(std::max<Eigen::Index>(n - 2, 0)),
                           std::vector<Scalar>(std::max<Eigen::Index>(n - 1, 0))};
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch, &kept);
+  const auto wanted = [&] {  // of the k smallest eigenvalues, those below `below`, at least one
+    return static_cast<int>(std::max<Eigen::Index>(1, (eigenvalues.head(k).array() < below).count()));
+  };
   const auto from_eigen = [&] {  // Eigen's decomposition, as eigenvalues_impl's fallback
     const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
     eigenvalues = eig.eigenvalues();
-    vectors = eig.eigenvectors().leftCols(k);
+    vectors = eig.eigenvectors().leftCols(wanted());
   };
   double norm;  // ‖T‖₂ = ‖A‖₂ / unit, or a Gershgorin bound on it
   const Eigen::VectorXd off_diagonal = subdiagonal.head(std::max<Eigen::Index>(n - 1, 0));  // |beta|, n − 1
@@ -408,6 +436,7 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
     norm = gershgorin_bounds(diagonal, off_diagonal).radius();
   }
   eigenvalues *= unit;
+  k = wanted();
   if (norm == 0) {  // A = 0: every vector is an eigenvector
     vectors = Matrix::Identity(n, k);
     return;
@@ -418,13 +447,15 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   const Eigen::VectorXd off = off_diagonal / norm;  // |beta| / ‖T‖, n − 1
   const double eps = std::numeric_limits<double>::epsilon();
   Eigen::MatrixXd found(n, k);  // eigenvectors of T, n × k
+  Eigen::VectorXd iterate(n);   // tridiagonal_eigenvector's work space
+  ShiftedTridiagonalLU lu(n);
   double sigma = 0;             // shift, in units of ‖T‖
   for (int j = 0; j < k; ++j) {
     // A shift equal to the previous one (a repeated eigenvalue) is moved up by 10ε‖T‖: the
     // orthogonalisation then picks the next vector of the eigenspace.
     const double value = eigenvalues[j] / unit / norm;
     sigma = j > 0 ? std::max(value, sigma + 10 * eps) : value;
-    tridiagonal_eigenvector(a, off, sigma, eps, j, found);
+    tridiagonal_eigenvector(a, off, sigma, eps, j, found, iterate, lu);
   }
   // (a safety net: before kPivotFloor a vector lost to overflow came out zero; review, session 28)
   if (!found.allFinite() || ((found.colwise().norm().array() - 1.0).abs() > 1e-6).any()) return from_eigen();
@@ -450,11 +481,13 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
 
 }  // namespace
 
-void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors) {
-  lowest_eigenpairs_impl(A, k, eigenvalues, vectors);
+void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors,
+                       double below) {
+  lowest_eigenpairs_impl(A, k, eigenvalues, vectors, true, below);
 }
-void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors) {
-  lowest_eigenpairs_impl(A, k, eigenvalues, vectors);
+void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors,
+                       double below) {
+  lowest_eigenpairs_impl(A, k, eigenvalues, vectors, true, below);
 }
 
 Eigen::MatrixXd lowest_vector(const Eigen::MatrixXd& A) {
