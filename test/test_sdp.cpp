@@ -378,6 +378,10 @@ TEST(SdpComplexForm, AutomaticSolvesItInComplexArithmeticAndAgreesWithTheInterio
         EXPECT_EQ(r.Lambda(i, 0), r.Lambda(i + 1, 1));
       }
       if (r.rank > 2) ++climbed;
+      // The rank (counted from the complex factor's own Gram) is Y's: its singular values above
+      // 1e-4 of the largest, by an SVD.
+      const Eigen::VectorXd singular = Eigen::JacobiSVD<Eigen::MatrixXd>(r.Y).singularValues();
+      EXPECT_EQ(r.rank, (singular.array() > 1e-4 * singular[0]).count());
       Options o;
       o.method = Method::interior_point;
       const Result ip = fact::sdp::solve(C, 2, o);

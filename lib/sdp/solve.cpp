@@ -624,12 +624,30 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
   return candidate_of(C, d, primal_dual(0.0, &ip));  // resumed where it handed off
 }
 
+// Whether Y (n × r) is exactly real_factor(Z) of a complex Z (n/2 × r/2): every 2 × 2 block
+// [[a, −b], [b, a]]. The complex paths' factors are, entry for entry.
+bool is_complex_embedding(const Eigen::MatrixXd& Y) {
+  if (Y.rows() % 2 != 0 || Y.cols() % 2 != 0) return false;
+  for (Eigen::Index k = 0; k < Y.cols(); k += 2)
+    for (Eigen::Index i = 0; i < Y.rows(); i += 2)
+      if (Y(i, k) != Y(i + 1, k + 1) || Y(i, k + 1) != -Y(i + 1, k)) return false;
+  return true;
+}
+
 // The singular values of Y (n × r) above 1e-4 of the largest, counted from the eigenvalues of
 // the r × r Gram matrix Yᵀ Y (their squares, so above 1e-8 of the largest): a symmetric
 // eigensolve of r × r instead of a Jacobi SVD of n × r, which took 8 % of a plain N = 16 solve;
-// by eigenvalues_of, not Eigen's solver (4 % of a tight N = 5 solve at r = 4).
+// by eigenvalues_of, not Eigen's solver (4 % of a tight N = 5 solve at r = 4). For Y =
+// real_factor(Z) the Gram Yᵀ Y is the embedding of Z's Gram Zᴴ Z (r/2 × r/2), which has its
+// eigenvalues, each once where Yᵀ Y has it twice: the count is twice Zᴴ Z's (the 4 × 4 real
+// eigensolve was 2.7 % of a tight N = 6 solve at r = 4; BENCHMARKS.md, session 49).
 int numerical_rank(const Eigen::MatrixXd& Y) {
   if (Y.cols() == 0) return 0;
+  if (is_complex_embedding(Y)) {
+    const Eigen::MatrixXcd Z = detail::complex_of_real_factor(Y);  // n/2 × r/2
+    const Eigen::VectorXd w = detail::eigenvalues_of(Eigen::MatrixXcd(Z.adjoint() * Z));
+    return 2 * static_cast<int>((w.array() > 1e-8 * w.maxCoeff()).count());
+  }
   const Eigen::MatrixXd gram = Y.transpose() * Y;  // r × r
   const Eigen::VectorXd w = detail::eigenvalues_of(gram);
   return static_cast<int>((w.array() > 1e-8 * w.maxCoeff()).count());
