@@ -20,6 +20,15 @@ namespace {
 double conj_of(double x) { return x; }
 std::complex<double> conj_of(const std::complex<double>& x) { return std::conj(x); }
 
+// |x| by √(|x|²) where |x|² can neither underflow nor overflow, by std::abs (libm's hypot for a
+// complex x, 20–40 ns a call: 1.2 % of a tight N = 6 solve, whose reductions take n − 1 each)
+// elsewhere.
+double magnitude(double x) { return std::abs(x); }
+double magnitude(const std::complex<double>& x) {
+  const double square = std::norm(x);
+  return square > 1e-280 && square < 1e280 ? std::sqrt(square) : std::abs(x);
+}
+
 // A column below the diagonal whose norm is at most this is reflected with its Householder vector
 // on the unit scale: v = x + phase‖x‖e₁ itself would make τ = 2/‖v‖² overflow once ‖x‖² underflows
 // (entries near 1e-160 in an O(1) matrix gave τ = ∞ and NaN eigenvalues; review, session 28).
@@ -56,14 +65,14 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
     for (Eigen::Index i = 1; i < m; ++i) tail += std::norm(x[i]);
     diagonal[k] = std::real(A(k, k));
     if (tail == 0) {  // already tridiagonal in this column
-      subdiagonal[k] = std::abs(x[0]);
+      subdiagonal[k] = magnitude(x[0]);
       if (kept) {
         kept->tau[k] = 0;
         kept->beta[k] = x[0];
       }
       continue;
     }
-    const double norm = std::sqrt(std::norm(x[0]) + tail), size0 = std::abs(x[0]);
+    const double norm = std::sqrt(std::norm(x[0]) + tail), size0 = magnitude(x[0]);
     const Scalar phase = size0 > 0 ? x[0] / size0 : Scalar(-1);
     subdiagonal[k] = norm;
     std::copy(x, x + m, v);
@@ -108,7 +117,7 @@ void tridiagonalize_impl(Matrix& A, Eigen::VectorXd& diagonal, Eigen::VectorXd& 
   }
   if (n >= 2) {
     diagonal[n - 2] = std::real(A(n - 2, n - 2));
-    subdiagonal[n - 2] = std::abs(A(n - 1, n - 2));
+    subdiagonal[n - 2] = magnitude(A(n - 1, n - 2));
     if (kept) kept->beta[n - 2] = A(n - 1, n - 2);
   }
   diagonal[n - 1] = std::real(A(n - 1, n - 1));
@@ -160,7 +169,7 @@ void tridiagonalize_padded(const Eigen::MatrixXd& original, Eigen::VectorXd& dia
   }
   if (n >= 2) {
     diagonal[n - 2] = A(n - 2, n - 2);
-    subdiagonal[n - 2] = std::abs(A(n - 1, n - 2));
+    subdiagonal[n - 2] = magnitude(A(n - 1, n - 2));
   }
   diagonal[n - 1] = A(n - 1, n - 1);
 }
