@@ -463,6 +463,19 @@ TEST(SdpComplexInteriorPoint, AutomaticModeCapsThePolishShift) {
   EXPECT_LE(steps, 30);
 }
 
+// The Schur-form Newton's skip of a first shift that failed last step: only at or below the failed
+// shift, only while ‖grad‖ is above 10× it, never in the polish (shift capped by the gradient), and
+// nothing to skip after a step without a failure.
+TEST(SdpComplexNewton, SkipsAFirstShiftThatFailedLastStepOnlyFarFromTheOptimum) {
+  using fact::sdp::detail::skipped_shift;
+  EXPECT_EQ(skipped_shift(1e-5, 1e-5, 1e-3, 0.0), 1e-5);   // failed at this shift, gradient 100× above it
+  EXPECT_EQ(skipped_shift(1e-6, 1e-5, 1e-3, 0.0), 1e-5);   // below a failed shift
+  EXPECT_EQ(skipped_shift(1e-4, 1e-5, 1e-3, 0.0), 0.0);    // above it: tried as usual
+  EXPECT_EQ(skipped_shift(1e-5, 1e-5, 5e-5, 0.0), 0.0);    // gradient within 10× of it: near the optimum
+  EXPECT_EQ(skipped_shift(1e-5, 1e-5, 1e-3, 0.1), 0.0);    // the polish
+  EXPECT_EQ(skipped_shift(1e-5, 0.0, 1e-3, 0.0), 0.0);     // no failure last step
+}
+
 // N = 32 seed 2 (as above): the hand-off's factor (X down to 1e-2) has rank 2 and its Newton ends
 // at a saddle, λ_min(S) < 0, in 5 steps (this instance's path at session 48's rounding: a kernel
 // that rounds differently can move the cut and the stages). Newton from X's factor down to 1e-3 (rank 3) certifies,

@@ -176,6 +176,11 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
 
 EIGEN_DONT_INLINE void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) { C.noalias() = A.lazyProduct(B); }
 
+double skipped_shift(double lambda, double carried_failure, double grad_norm, double shift_per_gradient) {
+  const bool skip = shift_per_gradient == 0 && lambda <= carried_failure && grad_norm > 10 * carried_failure;
+  return skip ? carried_failure : 0.0;
+}
+
 namespace {
 
 // One Levenberg–Marquardt-damped Newton system at shift λ in Schur form, without forming the
@@ -239,6 +244,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
   SchurWorkspace ws(N, Y.cols());
   ws.HY.noalias() = H * Y;
   double f = cost_of(Y, ws.HY);
+  double carried_failure = 0;  // the largest shift whose Cholesky failed (or was skipped) last step
   double lambda = 1e-8;  // the first shift tried: the decade at or below |curvature|/10, at most 1
   while (lambda < 1.0 && lambda * 10 <= 0.1 * std::abs(curvature)) lambda *= 10;  // (NaN: 1e-8)
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
@@ -251,6 +257,8 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
     certificate_matrix(H, ws.mu, ws.S);
     factor_gram(Y, ws.X);
     double failed_shift = 0;  // the largest shift whose Cholesky failed this step: λ_min(S) < −failed_shift
+    const double skipped = skipped_shift(lambda, carried_failure, grad_norm, shift_per_gradient);
+    if (skipped > 0) lambda = 10 * skipped;
     bool accepted = false;
     for (int tries = 0; tries < 14 && !accepted; ++tries, lambda *= 10) {
       const Trial trial = schur_newton_trial(Y, lambda, ws);
@@ -267,6 +275,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
       accepted = true;
     }
     if (!accepted) break;
+    carried_failure = std::max(failed_shift, skipped);
   }
   return it;
 }

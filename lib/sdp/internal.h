@@ -660,6 +660,16 @@ void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
 // gained half as much at N = 5 and 6. C is resized to N × p and must not alias A or B.
 void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::MatrixXcd& C);
 
+// The shift a Schur-form Newton step skips past (0: none): carried_failure, the largest shift
+// whose Cholesky failed (or that was skipped) in the last step, when it is at or above this step's
+// first shift λ and ‖grad‖ is above 10× it; the step then starts 10× above it. After a staircase
+// escape S keeps a negative eigenvalue for several steps, and the first shift of each, 10× below
+// the last accepted one, failed again (tight_noisy N = 12: 6 of the first 10 steps). The bound on
+// ‖grad‖ keeps the skip off the last steps, where S's negative eigenvalue is gone and the lower
+// shift would be accepted. Not with shift_per_gradient > 0 (the polish caps its shift instead).
+// Tight sweeps N = 5 … 24: 0.92–1.01 of the time (BENCHMARKS.md, session 49).
+double skipped_shift(double lambda, double carried_failure, double grad_norm, double shift_per_gradient);
+
 struct ComplexOutcome {
   Eigen::MatrixXcd Y;           // N × p factor with unit rows
   Eigen::VectorXd mu;           // multipliers μ_i = Re (H Y)_i y_iᴴ, N
