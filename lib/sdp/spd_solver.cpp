@@ -13,30 +13,50 @@ SpdSolver::SpdSolver(Eigen::Index n) : L_(n, n) {}
 
 namespace {
 
+// A pivot that L D Lᵀ accepts: positive and finite (an infinite one would leave D⁻¹ = 0 and a
+// finite x; the loops path takes it, session 48's review).
+bool usable_pivot(double pivot) { return pivot > 0 && pivot <= std::numeric_limits<double>::max(); }
+
 // A = L D Lᵀ (A n × n, n ≤ P, lower triangle read) into a (P × P, column-major, leading dimension
-// P): right-looking, column k's multiples of the pivot's row come off the trailing columns, then it
-// is divided by the pivot and everything else in its padded column set to zero; D's reciprocals
-// into inverse (P, zeros past n). Nothing but zeros is ever written above a's diagonal, so the
-// columns from n on, stale from a larger system, hold zeros in the first n rows: the substitutions
-// read only L's strictly lower n × n triangle and zeros, and the padding lanes stay at zero. False
-// when a pivot is not positive (A not positive definite) or not finite (an infinite one would leave
-// D⁻¹ = 0 and a finite x; the loops path takes it, session 48's review).
+// P), right-looking two columns at a time: column k + 1 takes column k's multiple off, then both
+// columns' multiples come off the trailing columns in one pass (n = 5 / 10 / 12: 36 / 124 / 170
+// ns a factorisation one column at a time against 30 / 96 / 136; BENCHMARKS.md, session 49); then
+// each is divided by its pivot and everything else in its padded column set to zero. D's
+// reciprocals into inverse (P, zeros past n). Nothing but zeros is ever written above a's
+// diagonal, so the columns from n on, stale from a larger system, hold zeros in the first n rows:
+// the substitutions read only L's strictly lower n × n triangle and zeros, and the padding lanes
+// stay at zero. False when a pivot is not usable (A not positive definite, or not finite).
 template <int P>
 bool ldl_padded(const Eigen::MatrixXd& A, double* a, double* inverse) {
   const int n = static_cast<int>(A.rows());
   for (int j = 0; j < n; ++j) std::copy(&A(j, j), &A(0, j) + n, a + j * P + j);
-  for (int k = 0; k < n; ++k) {
+  int k = 0;
+  for (; k + 1 < n; k += 2) {
     double* __restrict ak = a + k * P;
-    const double pivot = ak[k];
-    if (!(pivot > 0 && pivot <= std::numeric_limits<double>::max())) return false;
-    const double reciprocal = 1.0 / pivot;
+    double* __restrict next = a + (k + 1) * P;
+    if (!usable_pivot(ak[k])) return false;
+    const double reciprocal = 1.0 / ak[k];
+    const double multiple = ak[k + 1] * reciprocal;  // L(k + 1, k)
+    for (int i = k + 1; i < n; ++i) next[i] -= ak[i] * multiple;
+    if (!usable_pivot(next[k + 1])) return false;
+    const double next_reciprocal = 1.0 / next[k + 1];
     inverse[k] = reciprocal;
-    for (int j = k + 1; j < n; ++j) {
+    inverse[k + 1] = next_reciprocal;
+    for (int j = k + 2; j < n; ++j) {
       double* __restrict aj = a + j * P;
-      const double factor = ak[j] * reciprocal;
-      for (int i = j; i < n; ++i) aj[i] -= ak[i] * factor;
+      const double factor = ak[j] * reciprocal, next_factor = next[j] * next_reciprocal;
+      for (int i = j; i < n; ++i) aj[i] -= ak[i] * factor + next[i] * next_factor;
     }
-    for (int i = 0; i < P; ++i) ak[i] = i > k && i < n ? ak[i] * reciprocal : 0.0;  // the whole column
+    for (int i = 0; i < P; ++i) {  // the whole columns
+      ak[i] = i > k && i < n ? ak[i] * reciprocal : 0.0;
+      next[i] = i > k + 1 && i < n ? next[i] * next_reciprocal : 0.0;
+    }
+  }
+  if (k < n) {  // the last column of an odd n: its pivot only
+    double* __restrict ak = a + k * P;
+    if (!usable_pivot(ak[k])) return false;
+    inverse[k] = 1.0 / ak[k];
+    std::fill(ak, ak + P, 0.0);
   }
   std::fill(inverse + n, inverse + P, 0.0);
   return true;
