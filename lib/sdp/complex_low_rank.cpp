@@ -161,17 +161,24 @@ struct SchurWorkspace {
 
 }  // namespace
 
-// (explicit sums over the lower triangle, mirrored)
+// (column j is Σ_k conj(y_jk) y_k, by whole-column axpys: N = 6 / 12 / 24 at p = 2 took 38 / 135 /
+// 504 ns by sums over the lower triangle, mirrored, against 26 / 59 / 171 ns; BENCHMARKS.md,
+// session 49)
 void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
   const Eigen::Index N = Y.rows(), p = Y.cols();
   X.resize(N, N);
-  for (Eigen::Index j = 0; j < N; ++j)
-    for (Eigen::Index i = j; i < N; ++i) {
-      std::complex<double> sum = 0;
-      for (Eigen::Index k = 0; k < p; ++k) sum += Y(i, k) * std::conj(Y(j, k));
-      X(i, j) = sum;
-      X(j, i) = std::conj(sum);
+  if (p == 0) X.setZero();
+  for (Eigen::Index j = 0; j < N; ++j) {
+    std::complex<double>* __restrict x = &X(0, j);
+    for (Eigen::Index k = 0; k < p; ++k) {
+      const std::complex<double> weight = std::conj(Y(j, k));
+      const std::complex<double>* __restrict y = &Y(0, k);
+      if (k == 0)
+        for (Eigen::Index i = 0; i < N; ++i) x[i] = y[i] * weight;
+      else
+        for (Eigen::Index i = 0; i < N; ++i) x[i] += y[i] * weight;
     }
+  }
 }
 
 EIGEN_DONT_INLINE void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) { C.noalias() = A.lazyProduct(B); }

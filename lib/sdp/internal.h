@@ -647,8 +647,9 @@ bool shifted_positive_definite(const Eigen::MatrixXcd& H, const Eigen::VectorXd&
 int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iterations, double grad_tol,
                    bool saddle_exit = false, double curvature = 0, double shift_per_gradient = 0);
 
-// X = Y Yᴴ (N × N, both triangles) for Y N × p, p small, by plain loops: Eigen's lazy complex
-// product for it took 6–9 % of tight_noisy N = 5 and 6 (BENCHMARKS.md, session 39). X is resized.
+// X = Y Yᴴ (N × N, both triangles, each entry computed, so Hermitian up to rounding) for Y N × p, p
+// small, by plain loops: Eigen's lazy complex product for it took 6–9 % of tight_noisy N = 5 and 6
+// (BENCHMARKS.md, session 39). X is resized; p = 0 gives X = 0.
 void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
 // C = A B for A N × N and B N × p, p small (the factor's rank), by Eigen's lazy (coefficient-based)
 // product. Its general product for this shape took 8 % of tight_noisy N = 12 (BENCHMARKS.md,
