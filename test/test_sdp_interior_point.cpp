@@ -1213,6 +1213,29 @@ TEST(SdpKernels, FactorGramAndTimesThinMatchEigensProducts) {
     }
 }
 
+// bottom_vector_by_inverse (the complex spectral start from N = 8 to 32): H's bottom eigenvector
+// to an angle of about 1e-7 on positive semidefinite H (a random one, and one with a null vector
+// as on noise-free data), an empty result for an indefinite H.
+TEST(SdpKernels, BottomVectorByInverseFindsTheLowestEigenvector) {
+  using Eigen::MatrixXcd;
+  std::mt19937 rng(43);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (const Eigen::Index N : {8, 12, 20, 32})
+    for (const bool singular : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "N = " << N << (singular ? ", one null vector" : ""));
+      const MatrixXcd G = fact::test::gaussian_matrix<MatrixXcd>(N, singular ? N - 1 : N, rng, gauss);
+      const MatrixXcd H = G * G.adjoint() / static_cast<double>(N);  // N × N, positive semidefinite
+      const Eigen::SelfAdjointEigenSolver<MatrixXcd> reference(H);
+      const MatrixXcd v = fact::sdp::detail::bottom_vector_by_inverse(H);
+      ASSERT_EQ(v.rows(), N);
+      ASSERT_EQ(v.cols(), 1);
+      EXPECT_NEAR(v.norm(), 1.0, 1e-14);
+      EXPECT_GT(std::abs(reference.eigenvectors().col(0).dot(v.col(0))), 1.0 - 1e-12);
+      const MatrixXcd indefinite = H - 2.0 * reference.eigenvalues()[1] * MatrixXcd::Identity(N, N);
+      EXPECT_EQ(fact::sdp::detail::bottom_vector_by_inverse(indefinite).size(), 0);
+    }
+}
+
 TEST(SdpKernels, MultiplyWithATriangularOperandMatchesEigensProduct) {
   std::mt19937 rng(41);
   expect_triangular_products_match<Eigen::MatrixXd>(rng);
