@@ -72,7 +72,7 @@ double rank_one_trial(const MatrixXcd& H, const MatrixXcd& Y, RankOneWorkspace& 
     const std::complex<double> moved = Y(i, 0) + ws.eta[i] * (kI * Y(i, 0));
     ws.next(i, 0) = moved / std::sqrt(std::norm(moved));
   }
-  ws.next_HY.noalias() = H * ws.next;
+  times_thin(H, ws.next, ws.next_HY);
   return cost_of(ws.next, ws.next_HY);
 }
 
@@ -122,7 +122,7 @@ int rank_one_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iter
   const Eigen::Index N = H.rows();
   RankOneWorkspace ws(N);
   double damping = 1e-8;  // Levenberg–Marquardt shift of the Newton system
-  ws.HY.noalias() = H * Y;
+  times_thin(H, Y, ws.HY);
   double f = cost_of(Y, ws.HY);  // tr(Yᴴ H Y)
   const double noise = 100.0 * static_cast<double>(N) * std::numeric_limits<double>::epsilon() * H.norm();
   int it = 0;
@@ -284,7 +284,7 @@ int schur_complex_newton(const MatrixXcd& H, MatrixXcd& Y, int max_iterations, d
                          double curvature, double shift_per_gradient) {
   const Eigen::Index N = H.rows();
   SchurWorkspace ws(N, Y.cols());
-  ws.HY.noalias() = H * Y;
+  times_thin(H, Y, ws.HY);
   double f = cost_of(Y, ws.HY);
   double carried_failure = 0;  // the largest shift whose Cholesky failed (or was skipped) last step
   double lambda = 1e-8;  // the first shift tried: the decade at or below |curvature|/10, at most 1
@@ -402,7 +402,9 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
 
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
   VectorXd mu;
-  complex_multipliers(H * Y, Y, mu);
+  MatrixXcd HY;  // H Y, N × p
+  times_thin(H, Y, HY);
+  complex_multipliers(HY, Y, mu);
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
@@ -423,7 +425,9 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
     VectorXd mu;  // the multipliers at Y, N
-    complex_multipliers(H * Y, Y, mu);
+    MatrixXcd HY;  // H Y, N × p
+    times_thin(H, Y, HY);
+    complex_multipliers(HY, Y, mu);
     if (!can_climb && !spectrum_if_not_psd && !shifted_positive_definite(H, mu, 2.0 * options.psd_tol)) {
       // λ_min(S) < −2·psd_tol (up to rounding): not certified, and no spectrum is computed.
       ComplexOutcome out;

@@ -645,7 +645,16 @@ int numerical_rank(const Eigen::MatrixXd& Y) {
   if (Y.cols() == 0) return 0;
   if (is_complex_embedding(Y)) {
     const Eigen::MatrixXcd Z = detail::complex_of_real_factor(Y);  // n/2 × r/2
-    const Eigen::VectorXd w = detail::eigenvalues_of(Eigen::MatrixXcd(Z.adjoint() * Z));
+    const Eigen::MatrixXcd gram = Z.adjoint() * Z;                  // r/2 × r/2
+    Eigen::VectorXd w;  // its eigenvalues
+    if (gram.rows() == 2) {  // in closed form: the mean ± √(half the difference² + |off-diagonal|²)
+      const double mean = 0.5 * (gram(0, 0).real() + gram(1, 1).real());
+      const double half = 0.5 * (gram(0, 0).real() - gram(1, 1).real());
+      const double radius = std::sqrt(half * half + std::norm(gram(1, 0)));
+      w = Eigen::Vector2d(mean - radius, mean + radius);
+    } else {
+      w = detail::eigenvalues_of(gram);
+    }
     return 2 * static_cast<int>((w.array() > 1e-8 * w.maxCoeff()).count());
   }
   const Eigen::MatrixXd gram = Y.transpose() * Y;  // r × r
