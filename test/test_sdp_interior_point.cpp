@@ -1213,14 +1213,14 @@ TEST(SdpKernels, FactorGramAndTimesThinMatchEigensProducts) {
     }
 }
 
-// bottom_vector_by_inverse (the complex spectral start from N = 8 to 32): H's bottom eigenvector
-// to an angle of about 1e-7 on positive semidefinite H (a random one, and one with a null vector
-// as on noise-free data), an empty result for an indefinite H.
+// bottom_vector_by_inverse (the complex spectral start from N = 4 to 32, on W² up to 8 rows):
+// H's bottom eigenvector to an angle of about 1e-7 on positive semidefinite H (a random one, and
+// one with a null vector as on noise-free data), an empty result for an indefinite H.
 TEST(SdpKernels, BottomVectorByInverseFindsTheLowestEigenvector) {
   using Eigen::MatrixXcd;
   std::mt19937 rng(43);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (const Eigen::Index N : {8, 12, 20, 32})
+  for (const Eigen::Index N : {4, 6, 8, 9, 20, 32})
     for (const bool singular : {false, true}) {
       SCOPED_TRACE(testing::Message() << "N = " << N << (singular ? ", one null vector" : ""));
       const MatrixXcd G = fact::test::gaussian_matrix<MatrixXcd>(N, singular ? N - 1 : N, rng, gauss);

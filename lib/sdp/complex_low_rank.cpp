@@ -191,7 +191,8 @@ void factor_gram(const MatrixXcd& Y, MatrixXcd& X) {
 
 EIGEN_DONT_INLINE void times_thin(const MatrixXcd& A, const MatrixXcd& B, MatrixXcd& C) { C.noalias() = A.lazyProduct(B); }
 
-constexpr int kMaxPowerSteps = 30;  // bottom_vector_by_inverse
+constexpr int kMaxPowerSteps = 30;             // bottom_vector_by_inverse's steps at most
+constexpr Eigen::Index kSquaredPowerMaxSize = 8;  // up to which it iterates on W² instead of W
 
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
   const Eigen::Index N = H.rows();
@@ -201,6 +202,10 @@ Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
   MatrixXcd L_inv, W;  // L⁻¹ and W = (H + δI)⁻¹, N × N
   invert_lower_factor(L, L_inv);
   gram_of_lower_factor(L_inv, W);
+  if (N <= kSquaredPowerMaxSize) {  // W² (its product costs less than the steps it saves there)
+    times_thin(W, W, L_inv);
+    W.swap(L_inv);
+  }
   MatrixXcd v(N, 1), w(N, 1);  // iterates
   for (Eigen::Index i = 0; i < N; ++i) {  // a fixed, generic start
     const double turn = 0.6180339887498949 * static_cast<double>(i + 1);
@@ -333,11 +338,11 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 namespace {
 
 // From this size to kTridiagonalStartMaxSize the spectral start's eigenvector comes from
-// bottom_vector_by_inverse; below it the reduction is as cheap (N = 6: 1.1 µs either way).
-constexpr Eigen::Index kInverseStartMinSize = 8;
+// bottom_vector_by_inverse.
+constexpr Eigen::Index kInverseStartMinSize = 4;
 constexpr Eigen::Index kTridiagonalStartMaxSize = 32;  // above it bottom_eigenvectors' inverse iteration
 
-// The spectral start: H's bottom eigenvector (bottom_vector_by_inverse from N = 8 to 32;
+// The spectral start: H's bottom eigenvector (bottom_vector_by_inverse from N = 4 to 32;
 // bottom_eigenvectors otherwise, and where H + δI does not factor) with every entry normalised to
 // |z_i| = 1 (an entry at zero set to 1), N × 1. Exact on noise-free data, up to the power
 // iteration's angle.

@@ -661,14 +661,15 @@ void factor_gram(const Eigen::MatrixXcd& Y, Eigen::MatrixXcd& X);
 // gained half as much at N = 5 and 6. C is resized to N × p and must not alias A or B.
 void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::MatrixXcd& C);
 
-// H's bottom eigenvector (N × 1, unit) by power iteration on W = (H + δI)⁻¹, δ as
-// bottom_eigenvectors' shift, W formed once by the Schur-form Newton's kernels (Cholesky, L⁻¹,
-// L⁻ᴴ L⁻¹), until two iterates agree to |wᴴ v| > 1 − 1e-14 (an angle of about 1.4e-7) or after
-// 30 steps. Each step gains (λ₁ + δ)/(λ₂ + δ): 0.02–0.27 on the benchmark's noisy
+// H's bottom eigenvector (N × 1, unit) by power iteration on W = (H + δI)⁻¹ (on W² up to 8 rows),
+// δ as bottom_eigenvectors' shift, W formed once by the Schur-form Newton's kernels (Cholesky,
+// L⁻¹, L⁻ᴴ L⁻¹), until two iterates agree to |wᴴ v| > 1 − 1e-14 (an angle of about 1.4e-7) or
+// after 30 steps. Each step on W gains (λ₁ + δ)/(λ₂ + δ): 0.02–0.27 on the benchmark's noisy
 // instances (5–15 steps), about 0 on noise-free data; where λ₁ and λ₂ nearly coincide any vector
-// of their span is as good a start. N = 8 / 12 / 24 / 32: 1.6 / 3.2 / 11.9 / 19.3 µs by the
-// tridiagonal reduction, 0.9 / 1.5 / 4.3 / 8.2 µs this way (BENCHMARKS.md, session 49). Empty
-// when H + δI fails its Cholesky test (H not positive semidefinite).
+// of their span is as good a start. N = 5 / 6 / 8 / 12 / 24 / 32: 0.90 / 1.12 / 1.6 / 3.2 / 11.9 /
+// 19.3 µs by the tridiagonal reduction, 0.64 / 0.90 / 0.76 / 1.5 / 4.3 / 8.2 µs this way
+// (BENCHMARKS.md, session 49). Empty when H + δI fails its Cholesky test (H not positive
+// semidefinite).
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H);
 
 // The shift a Schur-form Newton step skips past (0: none): carried_failure, the largest shift
