@@ -222,7 +222,6 @@ Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
   return v;
 }
 
-
 double skipped_shift(double lambda, double carried_failure, double grad_norm, double shift_per_gradient) {
   const bool skip = shift_per_gradient == 0 && lambda <= carried_failure && grad_norm > 10 * carried_failure;
   return skip ? carried_failure : 0.0;
@@ -337,10 +336,12 @@ int complex_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_itera
 
 namespace {
 
-// From this size to kTridiagonalStartMaxSize the spectral start's eigenvector comes from
-// bottom_vector_by_inverse.
-constexpr Eigen::Index kInverseStartMinSize = 4;
-constexpr Eigen::Index kTridiagonalStartMaxSize = 32;  // above it bottom_eigenvectors' inverse iteration
+// From kPowerStartMinSize to kPowerStartMaxSize rows the spectral start's eigenvector comes from
+// bottom_vector_by_inverse. Below, and where H + δI does not factor, from the tridiagonal
+// reduction (bottom_eigenvectors with full_up_to = kPowerStartMaxSize); above, from
+// bottom_eigenvectors' subspace inverse iteration.
+constexpr Eigen::Index kPowerStartMinSize = 4;
+constexpr Eigen::Index kPowerStartMaxSize = 32;
 
 // The spectral start: H's bottom eigenvector (bottom_vector_by_inverse from N = 4 to 32;
 // bottom_eigenvectors otherwise, and where H + δI does not factor) with every entry normalised to
@@ -349,8 +350,8 @@ constexpr Eigen::Index kTridiagonalStartMaxSize = 32;  // above it bottom_eigenv
 Eigen::MatrixXcd spectral_start(const MatrixXcd& H) {
   const Eigen::Index N = H.rows();
   MatrixXcd Y;  // N × 1
-  if (N >= kInverseStartMinSize && N <= kTridiagonalStartMaxSize) Y = bottom_vector_by_inverse(H);
-  if (Y.size() == 0) Y = bottom_eigenvectors(H, 1, kTridiagonalStartMaxSize);
+  if (N >= kPowerStartMinSize && N <= kPowerStartMaxSize) Y = bottom_vector_by_inverse(H);
+  if (Y.size() == 0) Y = bottom_eigenvectors(H, 1, kPowerStartMaxSize);
   for (Eigen::Index i = 0; i < Y.rows(); ++i) Y(i, 0) = std::abs(Y(i, 0)) > 0 ? Y(i, 0) / std::abs(Y(i, 0)) : 1.0;
   return Y;
 }

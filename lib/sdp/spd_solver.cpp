@@ -62,14 +62,14 @@ bool ldl_padded(const Eigen::MatrixXd& A, double* a, double* inverse) {
   return true;
 }
 
-// x = A⁻¹ b (b: n entries) from ldl_padded's a and inverse, on a zero-padded P-vector: L z = b by
-// columns of L, then D⁻¹, then Lᵀ x = y by columns of Lᵀ (rows of L, read with stride P). The
-// zeros on and above L's diagonal leave the finished entries unchanged, so every step is a whole
-// P-vector update with no remainder loop: n = 5 / 8 / 12 took 32 / 57 / 91 ns a solve by loops over
-// the remaining rows against 14 / 25 / 52 ns (BENCHMARKS.md, session 49).
+// x = A⁻¹ b (b: n ≤ P entries, the n factored) from ldl_padded's a and inverse, on a zero-padded
+// P-vector: L z = b by columns of L, then D⁻¹, then Lᵀ x = y by columns of Lᵀ (rows of L, read
+// with stride P). The zeros on and above L's diagonal leave the finished entries unchanged, so
+// every step is a whole P-vector update with no remainder loop: n = 5 / 8 / 12 took 32 / 57 / 91
+// ns a solve by loops over the remaining rows against 13 / 22–33 / 55 ns (BENCHMARKS.md, session 49).
 template <int P>
-void solve_padded(const double* a, const double* inverse, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  const int n = static_cast<int>(b.size());
+void solve_padded(const double* a, const double* inverse, int n, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  eigen_assert(b.size() == n && n <= P);
   alignas(64) double y[P];
   for (int i = 0; i < P; ++i) y[i] = i < n ? b[i] : 0.0;
   for (int k = 0; k + 1 < n; ++k) {
@@ -93,6 +93,7 @@ bool SpdSolver::factor(const Eigen::MatrixXd& A) {
   path_ = n <= kLdlMaxSize ? Path::ldl : n <= kSmallSpdSize ? Path::loops : Path::blocked;
   if (path_ == Path::ldl) {
     padded_size_ = n <= 4 ? 4 : n <= 8 ? 8 : 12;
+    padded_rows_ = static_cast<int>(n);
     factored_ = padded_size_ == 4    ? ldl_padded<4>(A, padded_.data(), padded_inverse_.data())
                 : padded_size_ == 8 ? ldl_padded<8>(A, padded_.data(), padded_inverse_.data())
                                     : ldl_padded<12>(A, padded_.data(), padded_inverse_.data());
@@ -113,9 +114,10 @@ void SpdSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     return;
   }
   if (path_ == Path::ldl) {
-    if (padded_size_ == 4) return solve_padded<4>(padded_.data(), padded_inverse_.data(), b, x);
-    if (padded_size_ == 8) return solve_padded<8>(padded_.data(), padded_inverse_.data(), b, x);
-    return solve_padded<12>(padded_.data(), padded_inverse_.data(), b, x);
+    const double* a = padded_.data();
+    if (padded_size_ == 4) return solve_padded<4>(a, padded_inverse_.data(), padded_rows_, b, x);
+    if (padded_size_ == 8) return solve_padded<8>(a, padded_inverse_.data(), padded_rows_, b, x);
+    return solve_padded<12>(a, padded_inverse_.data(), padded_rows_, b, x);
   }
   if (&x != &b) x = b;
   if (path_ == Path::blocked) {

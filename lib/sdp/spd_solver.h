@@ -44,6 +44,7 @@ class SpdSolver {
   // substitution step is one whole P-vector operation with no remainder; padded_inverse_ holds
   // 1 / D_ii, zeros past n.
   int padded_size_ = 0;
+  int padded_rows_ = 0;  // n
   alignas(64) std::array<double, kLdlMaxSize * kLdlMaxSize> padded_{};
   alignas(64) std::array<double, kLdlMaxSize> padded_inverse_{};
 };
