@@ -991,15 +991,15 @@ TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
 
 // SpdSolver on each of its paths (L D Lᵀ to 12 rows, padded to 4, 8 or 12; cholesky_lower to 64
 // rows, right-looking below 24 and by columns from 24; Eigen's blocked kernel in place above; and
-// back, so that a smaller L D Lᵀ system follows a larger one in the same padding): x = A⁻¹ b for
-// A = B Bᵀ + n I, with x aliasing b, and the same x with A's strict upper triangle NaN (only the
-// lower one is read); false and a NaN solution for an indefinite A, one whose every pivot is
-// negative and one with a single eigenvalue just below zero.
+// back, so that a smaller L D Lᵀ system follows a larger one in the same padding and in another):
+// x = A⁻¹ b for A = B Bᵀ + n I, with x aliasing b, and the same x with A's strict upper triangle
+// NaN (only the lower one is read); false and a NaN solution for an indefinite A, one whose every
+// pivot is negative and one with a single eigenvalue just below zero.
 TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   fact::sdp::detail::SpdSolver solver(3);
-  for (int n : {1, 2, 4, 5, 8, 9, 12, 13, 23, 24, 64, 65, 100, 7, 3, 11}) {
+  for (int n : {1, 2, 4, 5, 8, 9, 12, 13, 23, 24, 64, 65, 100, 7, 3, 11, 10, 8, 6}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);
@@ -1194,7 +1194,8 @@ TEST(SdpKernels, FactorGramAndTimesThinMatchEigensProducts) {
       SCOPED_TRACE(testing::Message() << "N = " << N << ", p = " << p);
       const MatrixXcd Y = fact::test::gaussian_matrix<MatrixXcd>(N, p, rng, gauss);
       const MatrixXcd A = fact::test::gaussian_matrix<MatrixXcd>(N, N, rng, gauss);
-      MatrixXcd X = MatrixXcd::Constant(N + 1, N, {7.0, -7.0});  // wrong size, stale entries
+      // wrong size and stale entries; at p = 0 the right size, so that only setting X to zero clears them
+      MatrixXcd X = MatrixXcd::Constant(p == 0 ? N : N + 1, N, {7.0, -7.0});
       fact::sdp::detail::factor_gram(Y, X);
       ASSERT_EQ(X.rows(), N);
       ASSERT_EQ(X.cols(), N);

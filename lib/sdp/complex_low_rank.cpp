@@ -134,7 +134,9 @@ int rank_one_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iter
     // the spectral start the Hessian is indefinite and the ladder from 1e-8 failed up to about
     // ‖grad‖ (tight_noisy N = 6 / 12: 8 / 9 factorisations for the first step, accepted at 0.1 / 1
     // with ‖grad‖ = 0.12 / 0.49); the step accepted is the same unless a damping below that decade
-    // would have been.
+    // would have been. Every rank-1 run starts so (the polish of a rank-1 factor and the single
+    // step after a gap miss too); near the optimum ‖grad‖ is below 1e-7 and the damping stays 1e-8,
+    // and a damping of the order of ‖grad‖ keeps the step's convergence quadratic.
     if (it == 0)
       while (damping < 1.0 && damping * 10 <= grad_norm) damping *= 10;
     const double f_next = damped_newton_step(ws.Hm, ws.llt, ws.g, ws.eta, damping, f, noise,
@@ -346,7 +348,8 @@ constexpr Eigen::Index kPowerStartMaxSize = 32;
 // The spectral start: H's bottom eigenvector (bottom_vector_by_inverse from N = 4 to 32;
 // bottom_eigenvectors otherwise, and where H + δI does not factor) with every entry normalised to
 // |z_i| = 1 (an entry at zero set to 1), N × 1. Exact on noise-free data, up to the power
-// iteration's angle.
+// iteration's angle (H from the scaled problem, ‖C‖_F = 1, so that its shift δ is small against
+// λ₂; see bottom_vector_by_inverse).
 Eigen::MatrixXcd spectral_start(const MatrixXcd& H) {
   const Eigen::Index N = H.rows();
   MatrixXcd Y;  // N × 1
@@ -457,6 +460,7 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,
     // session 11: two save a level at N = 32 and 64 without slowing the next one).
     int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());
+    columns = std::min<int>(columns, static_cast<int>(out.eigenvectors.cols()));  // (as many as were found)
     while (columns > 1 && complex_newton_unknowns(N, p + columns) > max_unknowns) --columns;
     Y = escape(H, out.Y, out.eigenvectors.leftCols(columns));
     curvature = out.eigenvalues[0];

@@ -220,7 +220,8 @@ bool positive_definite_when_shifted(Matrix S, double t) {
 // eigenvalues and the reflectors applied back (O(n²) a vector); unit vectors for A = 0; Eigen's full
 // decomposition only if the QL iteration fails or a vector comes out non-finite or not of unit
 // length. NaN eigenvalues and vectors for a non-finite A. With `below`, vectors only of those of
-// the k smallest eigenvalues that are below it, but at least one (n × k', 1 ≤ k' ≤ k).
+// the k smallest eigenvalues that are below it, but at least one (n × k', min(1, k) ≤ k' ≤ k),
+// counted on the eigenvalues returned (Eigen's, when its decomposition was the fallback).
 void lowest_eigenpairs(const Eigen::MatrixXd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXd& vectors,
                        double below = std::numeric_limits<double>::infinity());
 void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenvalues, Eigen::MatrixXcd& vectors,
@@ -669,7 +670,8 @@ void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::Mat
 // of their span is as good a start. N = 5 / 6 / 8 / 12 / 24 / 32: 0.90 / 1.12 / 1.6 / 3.2 / 11.9 /
 // 19.3 µs by the tridiagonal reduction, 0.64 / 0.90 / 0.76 / 1.5 / 4.3 / 8.2 µs this way
 // (BENCHMARKS.md, session 49). Empty when H + δI fails its Cholesky test (H not positive
-// semidefinite).
+// semidefinite). δ does not scale with H: for H of norm 1e-10 the vector was off by 1e-4 … 0.14
+// (N = 6 … 32; review, session 49), so H must be of order 1, as the scaled problem's is.
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H);
 
 // The shift a Schur-form Newton step skips past (0: none): carried_failure, the largest shift

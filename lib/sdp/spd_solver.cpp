@@ -21,11 +21,12 @@ bool usable_pivot(double pivot) { return pivot > 0 && pivot <= std::numeric_limi
 // P), right-looking two columns at a time: column k + 1 takes column k's multiple off, then both
 // columns' multiples come off the trailing columns in one pass (n = 5 / 10 / 12: 36 / 124 / 170
 // ns a factorisation one column at a time against 30 / 96 / 136; BENCHMARKS.md, session 49); then
-// each is divided by its pivot and everything else in its padded column set to zero. D's
-// reciprocals into inverse (P, zeros past n). Nothing but zeros is ever written above a's
-// diagonal, so the columns from n on, stale from a larger system, hold zeros in the first n rows:
-// the substitutions read only L's strictly lower n × n triangle and zeros, and the padding lanes
-// stay at zero. False when a pivot is not usable (A not positive definite, or not finite).
+// each is divided by its pivot and everything else in its padded column set to zero, and the
+// columns from n on are set to zero (the buffer may hold a larger system's entries, or another
+// P's layout; the factor itself reads only rows at or below each diagonal). D's reciprocals into
+// inverse (P, zeros past n). So a holds L's strictly lower n × n triangle and zeros, and the
+// substitutions' padding lanes stay at zero. False when a pivot is not usable (A not positive
+// definite, or not finite).
 template <int P>
 bool ldl_padded(const Eigen::MatrixXd& A, double* a, double* inverse) {
   const int n = static_cast<int>(A.rows());
@@ -58,6 +59,7 @@ bool ldl_padded(const Eigen::MatrixXd& A, double* a, double* inverse) {
     inverse[k] = 1.0 / ak[k];
     std::fill(ak, ak + P, 0.0);
   }
+  std::fill(a + n * P, a + P * P, 0.0);
   std::fill(inverse + n, inverse + P, 0.0);
   return true;
 }

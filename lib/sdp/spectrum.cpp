@@ -423,8 +423,10 @@ void lowest_eigenpairs_impl(const Matrix& original, int k, Eigen::VectorXd& eige
   Reflectors<Scalar> kept{std::vector<double>(std::max<Eigen::Index>(n - 2, 0)),
                           std::vector<Scalar>(std::max<Eigen::Index>(n - 1, 0))};
   tridiagonalize_impl(A, diagonal, subdiagonal, scratch, &kept);
-  const auto wanted = [&] {  // of the k smallest eigenvalues, those below `below`, at least one
-    return static_cast<int>(std::max<Eigen::Index>(1, (eigenvalues.head(k).array() < below).count()));
+  const int asked = k;       // (k itself becomes the count of vectors found below)
+  const auto wanted = [&] {  // of the `asked` smallest eigenvalues, those below `below`, at least one
+    const Eigen::Index below_count = (eigenvalues.head(asked).array() < below).count();
+    return static_cast<int>(std::min<Eigen::Index>(asked, std::max<Eigen::Index>(1, below_count)));
   };
   const auto from_eigen = [&] {  // Eigen's decomposition, as eigenvalues_impl's fallback
     const Eigen::SelfAdjointEigenSolver<Matrix> eig(original);
