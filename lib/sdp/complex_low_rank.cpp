@@ -32,6 +32,15 @@ constexpr int kMaxNewColumns = 2;  // columns one staircase escape adds at most
 // f(Z) = tr(Zᴴ H Z) with ZH = H Z.
 double cost_of(const MatrixXcd& Z, const MatrixXcd& ZH) { return (ZH.array() * Z.array().conjugate()).real().sum(); }
 
+// μ at Y (N): complex_multipliers of H Y, by times_thin.
+VectorXd multipliers_at(const MatrixXcd& H, const MatrixXcd& Y) {
+  MatrixXcd HY;  // H Y, N × p
+  times_thin(H, Y, HY);
+  VectorXd mu;
+  complex_multipliers(HY, Y, mu);
+  return mu;
+}
+
 // The certificate matrix S = H − diag(μ) into S (N × N).
 void certificate_matrix(const MatrixXcd& H, const VectorXd& mu, MatrixXcd& S) {
   S = H;
@@ -91,19 +100,23 @@ void complex_multipliers(const Eigen::MatrixXcd& HY, const Eigen::MatrixXcd& Y, 
 
 // Messages by printed (vsnprintf) only on a mismatch: an std::ostringstream built on every call
 // cost 1 % of a tight N = 5 solve.
+std::pair<Eigen::Index, Eigen::Index> first_non_complex_block(const Eigen::MatrixXd& M) {
+  for (Eigen::Index j = 0; j < M.cols(); j += 2)
+    for (Eigen::Index i = 0; i < M.rows(); i += 2)
+      if (M(i, j) != M(i + 1, j + 1) || M(i, j + 1) != -M(i + 1, j)) return {i, j};
+  return {-1, -1};
+}
+
 std::string complex_embedding_mismatch(const Eigen::MatrixXd& C) {
   if (C.rows() != C.cols() || C.rows() % 2 != 0)
     return printed("C is %ld×%ld: not 2N × 2N", static_cast<long>(C.rows()), static_cast<long>(C.cols()));
+  const auto [i, j] = first_non_complex_block(C);
+  if (i < 0) return "";
   const char* what = ": not the real embedding of a Hermitian matrix (every 2×2 block [[a, −b], [b, a]])";
-  for (Eigen::Index j = 0; j < C.cols(); j += 2)
-    for (Eigen::Index i = 0; i < C.rows(); i += 2) {
-      const long a = static_cast<long>(i), b = static_cast<long>(j);
-      if (C(i, j) != C(i + 1, j + 1))
-        return printed("C(%ld,%ld) = %g but C(%ld,%ld) = %g%s", a, b, C(i, j), a + 1, b + 1, C(i + 1, j + 1), what);
-      if (C(i, j + 1) != -C(i + 1, j))
-        return printed("C(%ld,%ld) = %g but C(%ld,%ld) = %g%s", a, b + 1, C(i, j + 1), a + 1, b, C(i + 1, j), what);
-    }
-  return "";
+  const long a = static_cast<long>(i), b = static_cast<long>(j);
+  if (C(i, j) != C(i + 1, j + 1))
+    return printed("C(%ld,%ld) = %g but C(%ld,%ld) = %g%s", a, b, C(i, j), a + 1, b + 1, C(i + 1, j + 1), what);
+  return printed("C(%ld,%ld) = %g but C(%ld,%ld) = %g%s", a, b + 1, C(i, j + 1), a + 1, b, C(i + 1, j), what);
 }
 
 Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C) {
@@ -199,7 +212,7 @@ constexpr Eigen::Index kSquaredPowerMaxSize = 8;  // up to which it iterates on 
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
   const Eigen::Index N = H.rows();
   MatrixXcd L = H;  // H + δI, then its Cholesky factor (lower triangle)
-  L.diagonal().array() += 1e-10 * std::max(1.0, H.diagonal().real().cwiseAbs().maxCoeff());
+  L.diagonal().array() += inverse_iteration_shift(H);
   if (!cholesky_in_place(L)) return MatrixXcd();
   MatrixXcd L_inv, W;  // L⁻¹ and W = (H + δI)⁻¹, N × N
   invert_lower_factor(L, L_inv);
@@ -209,10 +222,7 @@ Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
     W.swap(L_inv);
   }
   MatrixXcd v(N, 1), w(N, 1);  // iterates
-  for (Eigen::Index i = 0; i < N; ++i) {  // a fixed, generic start
-    const double turn = 0.6180339887498949 * static_cast<double>(i + 1);
-    v(i, 0) = 1.0 + 0.5 * (turn - std::floor(turn));
-  }
+  for (Eigen::Index i = 0; i < N; ++i) v(i, 0) = generic_start_entry(i, 0);
   v.normalize();
   for (int step = 0; step < kMaxPowerSteps; ++step) {
     times_thin(W, v, w);
@@ -410,10 +420,7 @@ ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, Ei
 }
 
 ComplexOutcome complex_outcome(const Eigen::MatrixXcd& H, Eigen::MatrixXcd Y, int iterations, bool want_vectors) {
-  VectorXd mu;
-  MatrixXcd HY;  // H Y, N × p
-  times_thin(H, Y, HY);
-  complex_multipliers(HY, Y, mu);
+  VectorXd mu = multipliers_at(H, Y);
   return complex_outcome(H, std::move(Y), std::move(mu), iterations, want_vectors);
 }
 
@@ -433,10 +440,7 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
     iterations += complex_newton(H, Y, options.max_newton_iterations, 1e-12, true, curvature);
     const Eigen::Index p = Y.cols();
     const bool can_climb = complex_newton_unknowns(N, p + 1) <= max_unknowns && p < N;
-    VectorXd mu;  // the multipliers at Y, N
-    MatrixXcd HY;  // H Y, N × p
-    times_thin(H, Y, HY);
-    complex_multipliers(HY, Y, mu);
+    VectorXd mu = multipliers_at(H, Y);  // N
     if (!can_climb && !spectrum_if_not_psd && !shifted_positive_definite(H, mu, 2.0 * options.psd_tol)) {
       // λ_min(S) < −2·psd_tol (up to rounding): not certified, and no spectrum is computed.
       ComplexOutcome out;
@@ -459,8 +463,8 @@ ComplexOutcome solve_complex_low_rank(const Eigen::MatrixXcd& H, const Options& 
       out = complex_outcome(H, std::move(out.Y), std::move(out.mu), iterations, true, -options.psd_tol);
     // Up to kMaxNewColumns columns at once, one per negative eigenvalue (BENCHMARKS.md,
     // session 11: two save a level at N = 32 and 64 without slowing the next one).
+    // (lowest_eigenpairs found a vector for each of these: it counts on the same eigenvalues.)
     int columns = std::min<int>(kMaxNewColumns, (out.eigenvalues.array() < -options.psd_tol).count());
-    columns = std::min<int>(columns, static_cast<int>(out.eigenvectors.cols()));  // (as many as were found)
     while (columns > 1 && complex_newton_unknowns(N, p + columns) > max_unknowns) --columns;
     Y = escape(H, out.Y, out.eigenvectors.leftCols(columns));
     curvature = out.eigenvalues[0];

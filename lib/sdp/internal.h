@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fact/sdp.h"
@@ -233,8 +234,24 @@ void lowest_eigenpairs(const Eigen::MatrixXcd& A, int k, Eigen::VectorXd& eigenv
 Eigen::MatrixXd lowest_vector(const Eigen::MatrixXd& A);
 Eigen::MatrixXcd lowest_vector(const Eigen::MatrixXcd& A);
 
+// The shift δ of an inverse iteration toward M's bottom eigenvectors (M self-adjoint, real or
+// complex, positive semidefinite in the cases that matter): 1e-10 of M's largest diagonal entry,
+// at least 1e-10, so that M + δI factors when M is singular.
+template <class Matrix>
+double inverse_iteration_shift(const Matrix& M) {
+  return 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
+}
+
+// Entry i of the fixed, generic start vector number j of an inverse or power iteration:
+// 1 + 0.5·frac(0.618…·(i + 1) + 0.37·j), in [1, 1.5) (no sin calls: they cost 6 a vector, 0.7 %
+// of a tight N = 6 solve; BENCHMARKS.md, session 49).
+inline double generic_start_entry(Eigen::Index i, int j) {
+  const double turn = 0.6180339887498949 * static_cast<double>(i + 1) + 0.37 * j;
+  return 1.0 + 0.5 * (turn - std::floor(turn));
+}
+
 // The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
-// n × k, by subspace inverse iteration on M + δI: one Cholesky factorisation, then O(n²) per step,
+// n × k, by subspace inverse iteration on M + δI (δ: inverse_iteration_shift): one Cholesky factorisation, then O(n²) per step,
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
 // M + δI is not positive definite (M indefinite), lowest_eigenpairs (O(n³) once) is used instead.
 // The real staircase and the complex one start from it.
@@ -249,7 +266,7 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
     return vectors;
   };
   if (n <= full_up_to) return from_tridiagonal();  // small: the reduction is as cheap
-  const double shift = 1e-10 * std::max(1.0, M.diagonal().real().cwiseAbs().maxCoeff());
+  const double shift = inverse_iteration_shift(M);
   Matrix L = M;  // n × n: M + δI, then its factor in the lower triangle (cholesky_in_place)
   L.diagonal().array() += shift;
   if (!cholesky_in_place(L)) return from_tridiagonal();
@@ -617,6 +634,10 @@ bool zero_optimum(const Eigen::MatrixXd& C, int d, const NullSpace& null, NullSp
 // embedding of a Hermitian matrix (complex_form always returns one); otherwise the first
 // entry that breaks the pattern, named with its value.
 std::string complex_embedding_mismatch(const Eigen::MatrixXd& C);
+// The top-left entry (i, j) of the first 2×2 block of M (rows and columns even in number), by
+// columns, that is not exactly [[a, −b], [b, a]]; (−1, −1) when every block is, i.e. when M is the
+// real embedding of a complex matrix (real_factor's layout; complex_embedding_mismatch's test).
+std::pair<Eigen::Index, Eigen::Index> first_non_complex_block(const Eigen::MatrixXd& M);
 // The Hermitian N × N matrix H whose real embedding is C (2N × 2N): H_ij = C(2i,2j) + i·C(2i+1,2j).
 Eigen::MatrixXcd hermitian_of(const Eigen::MatrixXd& C);
 // The real embedding of any complex matrix, entry by entry (N × p → 2N × 2p; forms.cpp, where

@@ -627,11 +627,7 @@ Candidate from_interior_point(const Eigen::MatrixXd& C, int d, const Options& o,
 // Whether Y (n × r) is exactly real_factor(Z) of a complex Z (n/2 × r/2): every 2 × 2 block
 // [[a, −b], [b, a]]. The complex paths' factors are, entry for entry.
 bool is_complex_embedding(const Eigen::MatrixXd& Y) {
-  if (Y.rows() % 2 != 0 || Y.cols() % 2 != 0) return false;
-  for (Eigen::Index k = 0; k < Y.cols(); k += 2)
-    for (Eigen::Index i = 0; i < Y.rows(); i += 2)
-      if (Y(i, k) != Y(i + 1, k + 1) || Y(i, k + 1) != -Y(i + 1, k)) return false;
-  return true;
+  return Y.rows() % 2 == 0 && Y.cols() % 2 == 0 && detail::first_non_complex_block(Y).first < 0;
 }
 
 // The singular values of Y (n × r) above 1e-4 of the largest, counted from the eigenvalues of

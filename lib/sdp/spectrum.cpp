@@ -383,15 +383,11 @@ constexpr int kInverseIterations = 3;
 
 // Unit eigenvector of T (diagonal a, off-diagonal e) for the eigenvalue sigma, orthogonal to the
 // columns 0 … j − 1 of found (n × k, the vectors of lower eigenvalues), into found.col(j); u (n)
-// and lu are work space. The start is fixed and generic: entries 1 + 0.5·frac(0.618…·(i + 1) +
-// 0.37·j) (a sine there cost 6 sin calls an eigenvector, 0.7 % of a tight N = 6 solve).
+// and lu are work space. The start is generic_start_entry's vector j.
 void tridiagonal_eigenvector(const Eigen::VectorXd& a, const Eigen::VectorXd& e, double sigma, double tiny, int j,
                              Eigen::MatrixXd& found, Eigen::VectorXd& u, ShiftedTridiagonalLU& lu) {
   const Eigen::Index n = a.size();
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double turn = 0.6180339887498949 * static_cast<double>(i + 1) + 0.37 * j;
-    u[i] = 1.0 + 0.5 * (turn - std::floor(turn));
-  }
+  for (Eigen::Index i = 0; i < n; ++i) u[i] = generic_start_entry(i, j);
   const auto unit = [](Eigen::VectorXd& x) {  // (scaled first only if the squared norm overflows)
     if (std::isfinite(x.squaredNorm())) x.normalize(); else x.stableNormalize();
   };
