@@ -157,6 +157,18 @@ double complementarity_after(const Eigen::MatrixXd& X, const Eigen::MatrixXd& dx
 constexpr int kSquareCentringMaxSize = 48;
 int centring_exponent(int n) { return n <= kSquareCentringMaxSize ? 2 : 3; }
 
+// The predictor's step lengths only set the centring σ (through μ_aff). After a run's first
+// iteration they are not searched but taken as this fraction of the last corrector's (for X and
+// for Z apart): on the grid the predictor's step was mostly 0.7 where the corrector's was 0.95,
+// and its search cost two or more Cholesky tests of each of X and Z an iteration (a sixth of an
+// iteration at n = 24). Sweep (4 seeds; the plain form and the paper's cost with 2N and 3N rounds
+// at noise 0.002 … 0.1, random C of rank 3, N + 1 and full; N = 5 … 24; fastest of two runs each
+// side, interleaved): 0.85–0.94 of the time wherever the interior point runs, iterations within
+// ±2 % by row (one random full-rank N = 24 instance 23 → 29), the other rows 0.99–1.01, no status
+// or objective changed; 0.65 and 0.85 took 0.96–1.03 and 1.00–1.10 of 0.75's time
+// (BENCHMARKS.md, session 50).
+constexpr double kAffineStepFraction = 0.75;
+
 }  // namespace
 
 InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const Options& options, double handoff_gap,
@@ -193,6 +205,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   // corrector's step-length tests computed for the step taken (take_tested), or still those of X
   // and Z when a step length is 0: two n × n factorisations fewer per iteration.
   bool factored = false;
+  double last_ap = 0, last_ad = 0;  // the last corrector's step lengths (kAffineStepFraction)
   for (int it = done; it < options.max_ipm_iterations; ++it) {
     out.iterations = it + 1 - done;
     const double primal = (C.cwiseProduct(X)).sum(), dual = b.dot(y);
@@ -226,8 +239,11 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     ws.dz_aff = -ws.dz_aff;  // ΔZ = −Aᵀ(Δy), stacked blocks
     times_block_diagonal(X, ws.dz_aff, d, ws.P);  // X ΔZ
     primal_direction(X, 0.0, accurate, ws, ws.dx_aff);
-    const double ap_aff = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx_aff, 1.0);
-    const double ad_aff = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz_aff, d, 1.0);
+    const bool searched = it == done;  // the run's first iteration (kAffineStepFraction)
+    const double ap_aff = searched ? ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx_aff, 1.0)
+                                   : std::min(1.0, kAffineStepFraction * last_ap);
+    const double ad_aff = searched ? ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz_aff, d, 1.0)
+                                   : std::min(1.0, kAffineStepFraction * last_ad);
     const double mu_aff = complementarity_after(X, ws.dx_aff, ap_aff, Z, ws.dz_aff, ad_aff, d) / n;
     const double sigma = mehrotra_centring(mu_aff, mu, centring_exponent(n));
     // Corrector: T = σμW − X − ΔX_a ΔZ_a W, M Δy = −A(T); ΔX = T − X ΔZ W.
@@ -248,6 +264,8 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     primal_direction(X, sigma * mu, accurate, ws, ws.dx);
     const double ap = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx, tau);
     const double ad = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz, d, tau);
+    last_ap = ap;
+    last_ad = ad;
     if (ap == 0.0 && ad == 0.0) {
       out.reason = "interior point stalled at iteration " + std::to_string(it);
       break;

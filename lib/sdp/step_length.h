@@ -17,7 +17,8 @@ namespace fact::sdp::detail {
 
 // Largest n for which the step lengths are found on a grid by Cholesky tests (StepLength); above
 // it a Lanczos estimate is confirmed by Cholesky tests. On the grid the predictor's step (τ = 1:
-// it only sets the centring σ) is the first of 1, 0.7, 0.7², … that passes, within a factor
+// it only sets the centring σ; the real interior point searches it at a run's first iteration only,
+// interior_point.cpp's kAffineStepFraction) is the first of 1, 0.7, 0.7², … that passes, within a factor
 // kPredictorStepRatio of min(1, α_max); the corrector's the first of 1, 0.95, 0.95², … (down to
 // about ½, then 0.7 a step) for which P + (α/τ)Δ passes, so that α < τ·α_max and, on the fine
 // part, α ≥ kCorrectorStepRatio·min(1, τ·α_max). Until session 45 both were exact up to 48 rows
