@@ -1492,13 +1492,13 @@ TEST(SdpNewton, RankTwoAttemptStopsCrawlingOnFullRankButNotOnLowRank) {
   }
 }
 
-// The rank-2 attempt that automatic mode hands to the interior point skips S's spectrum only
-// when its gradient proves λ_min(S) < −psd_tol: on random C of full rank (N = 64) the crawl
-// watch stops it far from a critical point, and its certificate comes without eigenvalues, NaN
-// for λ_min and the bound, and the Λ of the same factor, whose S (computed here) has λ_min below
-// −psd_tol indeed; on C of rank 3 (zero optimum of rank 2) it converges, certifies and keeps its
-// spectrum.
-TEST(SdpNewton, RankTwoAttemptSkipsTheSpectrumOnlyWhenItsGradientRulesTheCertificateOut) {
+// The rank-2 attempt that automatic mode hands to the interior point skips S's spectrum when its
+// gradient proves λ_min(S) < −psd_tol (or a Cholesky test does: the next test): on random C of
+// full rank (N = 64) the crawl watch stops it far from a critical point, and its certificate
+// comes without eigenvalues, NaN for λ_min and the bound, and the Λ of the same factor, whose S
+// (computed here) has λ_min below −psd_tol indeed; on C of rank 3 (zero optimum of rank 2) it
+// converges, certifies and keeps its spectrum.
+TEST(SdpNewton, RankTwoAttemptFarFromACriticalPointSkipsTheSpectrumByItsGradient) {
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
   const Options rank_two = rank_two_attempt();
@@ -1524,6 +1524,31 @@ TEST(SdpNewton, RankTwoAttemptSkipsTheSpectrumOnlyWhenItsGradientRulesTheCertifi
       EXPECT_EQ(skipping.certificate.eigenvalues.size(), 128);
       EXPECT_EQ(skipping.certificate.min_eig, full.certificate.min_eig);
     }
+  }
+}
+
+// Where the rank-2 attempt converges to a saddle (random C of full rank, n = 24 and 32: the
+// optimum has a higher rank), S Y is at rounding level and the gradient proves nothing; S's
+// spectrum is still skipped, since S + psd_tol·I fails a Cholesky test. The same run with the
+// spectrum finds λ_min(S) below −psd_tol, with the same factor and Λ.
+TEST(SdpNewton, RankTwoAttemptAtASaddleSkipsTheSpectrumByACholeskyTest) {
+  std::mt19937 rng(41);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Options rank_two = rank_two_attempt();
+  for (int n : {24, 32}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd C = scaled_random_psd(n, n, rng, gauss);
+    const auto full = fact::sdp::detail::solve_low_rank(C, 2, rank_two);
+    const auto skipping = fact::sdp::detail::solve_low_rank(C, 2, rank_two, 0.0, true);
+    ASSERT_FALSE(full.certified);
+    EXPECT_LT(full.certificate.min_eig, -rank_two.psd_tol);
+    EXPECT_FALSE(skipping.certified);
+    EXPECT_EQ((skipping.Y - full.Y).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((skipping.certificate.lambda - full.certificate.lambda).cwiseAbs().maxCoeff(), 0.0);
+    const Eigen::MatrixXd S = fact::sdp::detail::certificate_matrix(C, skipping.certificate.lambda, 2);
+    EXPECT_LT((S * skipping.Y).norm(), 1e-9);  // a critical point: the gradient rules nothing out
+    EXPECT_EQ(skipping.certificate.eigenvalues.size(), 0);
+    EXPECT_TRUE(std::isnan(skipping.certificate.min_eig) && std::isnan(skipping.certificate.dual_bound));
   }
 }
 

@@ -397,7 +397,7 @@ struct LowRankOutcome {
 // level's Newton run stops early when it crawls (newton_refine's crawl_decrease). With
 // spectrum_only_if_certifiable, a last level whose gradient alone proves λ_min(S) < −psd_tol
 // (low_rank.cpp, provably_indefinite: a run stopped far from a critical point, by the crawl watch
-// or by its step cap) skips S's spectrum: its
+// or by its step cap), or whose S + psd_tol·I fails a Cholesky test (a saddle), skips S's spectrum: its
 // certificate has Λ and tr Λ, no eigenvalues, and NaN for λ_min and the bound, for a caller that
 // goes on to another method. With climb_eig > 0 the staircase climbs past rank d only from a
 // critical point with steep negative curvature: ‖S Y‖_F < climb_eig (S Y is half the gradient)
