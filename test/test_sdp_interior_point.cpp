@@ -1037,8 +1037,9 @@ TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
   }
 }
 
-// cholesky_in_place on every path (real: Eigen's unblocked kernel below 128 rows, its blocked one
-// from 128; complex: complex_cholesky_by_loops below 40 rows, complex_cholesky_by_panels of 24
+// cholesky_in_place on every path (real: Eigen's unblocked kernel below 49 rows, the padded
+// kernel from 49 (odd sizes and sizes between its paddings among them: 49, 57, 63, 100, 121, 127),
+// Eigen's blocked one from 128; complex: complex_cholesky_by_loops below 40 rows, complex_cholesky_by_panels of 24
 // columns below 256 (a last panel of 16, 24 and 1 column at n = 40, 48 and 49), Eigen's blocked
 // kernel from 256): L Lᴴ = A for a positive definite A, the upper triangle left as it
 // was; false for an indefinite A (a negative eigenvalue that only the last pivot sees, and a
@@ -1047,7 +1048,7 @@ TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
 template <class Matrix>
 void expect_cholesky_on_every_path(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (int n : {1, 2, 5, 31, 32, 39, 40, 48, 49, 63, 64, 100, 127, 128, 140, 255, 256}) {
+  for (int n : {1, 2, 5, 31, 32, 39, 40, 48, 49, 57, 63, 64, 100, 121, 127, 128, 140, 255, 256}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Matrix B = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
     const Matrix A = B * B.adjoint() + Matrix::Identity(n, n);

@@ -152,6 +152,9 @@ double damped_newton_step(Eigen::MatrixXd& H, SpdSolver& llt, const Eigen::Vecto
 // 1512 µs unblocked, the real one faster from 128 as before (BENCHMARKS.md, session 35).
 constexpr Eigen::Index kBlockedCholeskyMinSize = 128;
 constexpr Eigen::Index kBlockedComplexCholeskyMinSize = 256;
+// From this size up to kBlockedCholeskyMinSize a real cholesky_in_place runs
+// padded_cholesky_in_place instead of Eigen's unblocked kernel (n = 48: 2.09 against 2.18 µs).
+constexpr Eigen::Index kPaddedCholeskyMinSize = 49;
 
 // Below this size a complex cholesky_in_place runs complex_cholesky_by_loops instead of Eigen's
 // unblocked kernel: tight_noisy N = 5 / 6 / 12 / 32 took 0.97 / 0.96 / 0.97 / 0.97 of the time,
@@ -182,8 +185,17 @@ bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStrid
 // kernel go a column at a time). False at the first pivot that is not positive.
 bool complex_cholesky_by_panels(Eigen::MatrixXcd& A);
 
+// A = L Lᵀ for a real symmetric A of kPaddedCholeskyMinSize … kBlockedCholeskyMinSize − 1 rows, in
+// place into its lower triangle (the upper one untouched), on a copy padded to a multiple of 8 rows
+// (step_length.cpp): right-looking, two columns at a time, every update over whole 8-row blocks.
+// Against Eigen's unblocked kernel (matrix–vector products a column), n = 64 / 72 / 96 / 120 took
+// 4.39 / 5.91 / 11.8 / 20.6 µs, this way 3.51 / 4.54 / 8.83 / 16.9 µs (BENCHMARKS.md, session 50).
+// False at the first pivot that is not positive (a NaN one too).
+bool padded_cholesky_in_place(Eigen::MatrixXd& A);
+
 // A = L Lᴴ for a self-adjoint A (n × n, real or complex), factored in place into A's lower
-// triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize (complex:
+// triangle by Eigen's unblocked kernel below kBlockedCholeskyMinSize (real: padded_cholesky_in_place
+// from kPaddedCholeskyMinSize; complex:
 // complex_cholesky_by_loops below kLoopComplexCholeskyMaxSize, then complex_cholesky_by_panels
 // below kBlockedComplexCholeskyMinSize) and its blocked one from it;
 // false when A is not positive definite or its lower triangle has a NaN or infinite entry (of a
@@ -202,6 +214,9 @@ bool cholesky_in_place(Matrix& A) {
   if constexpr (is_complex) {
     if (A.rows() < kLoopComplexCholeskyMaxSize) return complex_cholesky_by_loops(A) && A.diagonal().real().allFinite();
     if (A.rows() < blocked_from) return complex_cholesky_by_panels(A) && A.diagonal().real().allFinite();
+  } else {
+    if (A.rows() >= kPaddedCholeskyMinSize && A.rows() < blocked_from)
+      return padded_cholesky_in_place(A) && A.diagonal().allFinite();
   }
   return (A.rows() < blocked_from ? Kernel::unblocked(A) : Kernel::blocked(A)) == -1 &&
          A.diagonal().real().allFinite();

@@ -260,6 +260,77 @@ bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStrid
   return true;
 }
 
+namespace {
+
+// padded_cholesky_in_place for n ≤ P rows (P a multiple of 8) on a P × P column-major copy on the
+// stack: column j holds A's lower part from row j, zeros from the start of its 8-row block to row j
+// and from row n on, so that every update runs over whole 8-row blocks, from the block that holds
+// the first row it needs to row P, with no remainder loop (the rows above that first row take
+// finite values nothing reads; the rows from n on stay 0). Columns k and k + 1 are finished
+// together and taken off each later column in one pass.
+template <int P>
+bool cholesky_padded(Eigen::MatrixXd& A) {
+  alignas(64) double a[P * P];
+  const int n = static_cast<int>(A.rows());
+  for (int j = 0; j < n; ++j) {
+    double* aj = a + j * P;
+    for (int i = j & ~7; i < j; ++i) aj[i] = 0.0;
+    for (int i = j; i < n; ++i) aj[i] = A(i, j);
+    for (int i = n; i < P; ++i) aj[i] = 0.0;
+  }
+  int k = 0;
+  for (; k + 1 < n; k += 2) {
+    double* __restrict lk = a + k * P;
+    double* __restrict next = a + (k + 1) * P;
+    if (!(lk[k] > 0)) return false;
+    const double root = std::sqrt(lk[k]), scale = 1.0 / root;
+    const double below = lk[k + 1] * scale;  // L(k + 1, k)
+    const double pivot = next[k + 1] - below * below;
+    if (!(pivot > 0)) return false;
+    const double next_root = std::sqrt(pivot), next_scale = 1.0 / next_root;
+    for (int b = k & ~7; b < P; b += 8)
+      for (int t = b; t < b + 8; ++t) {
+        lk[t] *= scale;
+        next[t] = (next[t] - lk[t] * below) * next_scale;
+      }
+    lk[k] = root;
+    next[k + 1] = next_root;
+    for (int j = k + 2; j < n; ++j) {
+      double* __restrict aj = a + j * P;
+      const double factor = lk[j], next_factor = next[j];
+      for (int b = j & ~7; b < P; b += 8)
+        for (int t = b; t < b + 8; ++t) aj[t] -= lk[t] * factor + next[t] * next_factor;
+    }
+  }
+  if (k < n) {  // the last column of an odd n: its pivot only
+    double* lk = a + k * P;
+    if (!(lk[k] > 0)) return false;
+    lk[k] = std::sqrt(lk[k]);
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = j; i < n; ++i) A(i, j) = a[j * P + i];
+  return true;
+}
+
+}  // namespace
+
+bool padded_cholesky_in_place(Eigen::MatrixXd& A) {
+  static_assert(kPaddedCholeskyMinSize > 48 && kBlockedCholeskyMinSize <= 128, "the padded sizes below");
+  eigen_assert(A.rows() >= kPaddedCholeskyMinSize && A.rows() < kBlockedCholeskyMinSize);
+  switch ((A.rows() + 7) / 8) {
+    case 7: return cholesky_padded<56>(A);
+    case 8: return cholesky_padded<64>(A);
+    case 9: return cholesky_padded<72>(A);
+    case 10: return cholesky_padded<80>(A);
+    case 11: return cholesky_padded<88>(A);
+    case 12: return cholesky_padded<96>(A);
+    case 13: return cholesky_padded<104>(A);
+    case 14: return cholesky_padded<112>(A);
+    case 15: return cholesky_padded<120>(A);
+    default: return cholesky_padded<128>(A);  // 121 … 127 rows
+  }
+}
+
 bool complex_cholesky_by_panels(Eigen::MatrixXcd& A) {
   const Eigen::Index n = A.rows();
   for (Eigen::Index k = 0; k < n; k += kComplexCholeskyPanel) {
