@@ -1238,6 +1238,32 @@ TEST(SdpKernels, BottomVectorByInverseFindsTheLowestEigenvector) {
     }
 }
 
+// bottom_vectors_by_inverse (the real staircase's spectral start from 16 to 64 rows): C's bottom two
+// eigenvectors, orthonormal, spanning the reference's subspace (projectors within 1e-6: 12 steps,
+// each gaining (λ₂ + δ)/(λ₅ + δ), 2e-8 at worst here) on
+// positive semidefinite C (a random one of full rank, and one with a two-dimensional null space,
+// as the paper's cost on noise-free data has); an empty result for an indefinite C.
+TEST(SdpKernels, BottomVectorsByInverseSpanTheLowestEigenvectors) {
+  std::mt19937 rng(47);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (const Eigen::Index n : {16, 24, 33, 48, 64})
+    for (const bool singular : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "n = " << n << (singular ? ", null space of dimension 2" : ""));
+      const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, singular ? n - 2 : n, rng, gauss);
+      Eigen::MatrixXd C = G * G.transpose();  // n × n, positive semidefinite
+      C /= C.norm();
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> reference(C);
+      const Eigen::MatrixXd V = fact::sdp::detail::bottom_vectors_by_inverse(C, 2);
+      ASSERT_EQ(V.rows(), n);
+      ASSERT_EQ(V.cols(), 2);
+      EXPECT_LT((V.transpose() * V - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff(), 1e-13);
+      const Eigen::MatrixXd U = reference.eigenvectors().leftCols(2);  // n × 2
+      EXPECT_LT((V * V.transpose() - U * U.transpose()).norm(), 1e-6);
+      const Eigen::MatrixXd indefinite = C - 2.0 * reference.eigenvalues()[2] * Eigen::MatrixXd::Identity(n, n);
+      EXPECT_EQ(fact::sdp::detail::bottom_vectors_by_inverse(indefinite, 2).size(), 0);
+    }
+}
+
 TEST(SdpKernels, MultiplyWithATriangularOperandMatchesEigensProduct) {
   std::mt19937 rng(41);
   expect_triangular_products_match<Eigen::MatrixXd>(rng);

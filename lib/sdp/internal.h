@@ -710,6 +710,12 @@ void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::Mat
 // (N = 6 … 32; review, session 49), so H must be of order 1, as the scaled problem's is.
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H);
 
+// The real counterpart for the real staircase's spectral start (low_rank.cpp, 16 … 64 rows): C's
+// bottom k eigenvectors (n × k, orthonormal) by a fixed number of subspace steps on
+// W = (C + δI)⁻¹ with two guard vectors and a Rayleigh–Ritz step; empty when C + δI fails its
+// Cholesky test.
+Eigen::MatrixXd bottom_vectors_by_inverse(const Eigen::MatrixXd& C, int k);
+
 // The shift a Schur-form Newton step skips past (0: none): carried_failure, the largest shift
 // whose Cholesky failed (or that was skipped) in the last step, when it is at or above this step's
 // first shift λ and ‖grad‖ is above 10× it; the step then starts 10× above it. After a staircase

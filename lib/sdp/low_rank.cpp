@@ -5,6 +5,7 @@
 #include <random>
 
 #include "internal.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 
@@ -105,10 +106,57 @@ static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::Vect
   return next;
 }
 
+// From kInverseStartMinSize to kInverseStartMaxSize rows the spectral start's vectors come from
+// bottom_vectors_by_inverse; below (and where C + δI does not factor) from the tridiagonal
+// reduction, above from bottom_eigenvectors' inverse iteration by triangular solves.
+constexpr Eigen::Index kInverseStartMinSize = 16;
+constexpr Eigen::Index kInverseStartMaxSize = 64;
+// Steps of bottom_vectors_by_inverse, as bottom_eigenvectors' iteration takes.
+constexpr int kInverseStartSteps = 12;
+
+// C's bottom k eigenvectors (n × k, orthonormal) by subspace iteration on W = (C + δI)⁻¹ (δ:
+// inverse_iteration_shift) with two guard vectors: W formed once by the interior point's kernels
+// (Cholesky, L⁻¹, L⁻ᵀ L⁻¹), then kInverseStartSteps products W·V (n × (k + 2)), each followed by
+// Gram–Schmidt twice, and a Rayleigh–Ritz step on C. The products replace bottom_eigenvectors'
+// pairs of triangular solves, which Eigen runs slowly at these sizes, and the tridiagonal
+// reduction's QL sweeps and back-transformation: random C of full rank at n = 16 / 24 / 32 / 48 /
+// 64 took 5.6 / 10.0 / 16.0 / 34.0 / 59.9 µs by the reduction (8.4 / 12.3 / 16.2 / 25.8 / 36.2 µs
+// by triangular solves), 4.9 / 6.6 / 8.9 / 15.0 / 25.9 µs this way, the same subspace to 4e-12 …
+// 7e-8; at n = 100 the triangular solves were faster (73 against 93 µs; BENCHMARKS.md, session 50).
+// Empty when C + δI fails its Cholesky test.
+Eigen::MatrixXd bottom_vectors_by_inverse(const Eigen::MatrixXd& C, int k) {
+  const Eigen::Index n = C.rows();
+  Eigen::MatrixXd L = C;  // C + δI, then its Cholesky factor (lower triangle), n × n
+  L.diagonal().array() += inverse_iteration_shift(C);
+  if (!cholesky_in_place(L)) return Eigen::MatrixXd();
+  Eigen::MatrixXd L_inv, W;  // L⁻¹ and W = (C + δI)⁻¹, n × n
+  invert_lower_factor(L, L_inv);
+  gram_of_lower_factor(L_inv, W);
+  const int m = k + 2;
+  Eigen::MatrixXd V(n, m), next(n, m);  // orthonormal iterates, n × m
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) V(i, j) = generic_start_entry(i, j);
+  for (int step = 0; step < kInverseStartSteps; ++step) {
+    next.noalias() = W * V;
+    for (int j = 0; j < m; ++j) {
+      for (int pass = 0; pass < 2; ++pass)
+        for (int i = 0; i < j; ++i) next.col(j) -= next.col(i).dot(next.col(j)) * next.col(i);
+      next.col(j).normalize();
+    }
+    V.swap(next);
+  }
+  const Eigen::MatrixXd T = V.transpose() * C * V;  // Rayleigh–Ritz, m × m
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> small(T);
+  return V * small.eigenvectors().leftCols(k);
+}
+
 // Spectral start: the bottom-d eigenvectors of C, each block projected to orthonormal rows.
 // Exact when the data are noise-free and the optimum unique.
 static Eigen::MatrixXd spectral_factor(const Eigen::MatrixXd& C, int d, unsigned seed) {
-  Eigen::MatrixXd Y = bottom_eigenvectors(C, d, 64);
+  const Eigen::Index n = C.rows();
+  Eigen::MatrixXd Y;  // n × d
+  if (n >= kInverseStartMinSize && n <= kInverseStartMaxSize) Y = bottom_vectors_by_inverse(C, d);
+  if (Y.size() == 0) Y = bottom_eigenvectors(C, d, kInverseStartMaxSize);
   Eigen::MatrixXd fallback;  // n × d, drawn only when a block has no direction (seeding costs 2 % at N = 3)
   for (Eigen::Index i = 0; i < Y.rows(); i += d) {
     const Eigen::MatrixXd block = polar_rows(Y.middleRows(i, d));
