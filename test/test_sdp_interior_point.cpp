@@ -866,7 +866,8 @@ TEST(SdpTriangularKernels, InverseAndGramOfTheFactorMatchDenseProducts) {
 // the grid (n ≤ 48) and the Lanczos path, for a full and a block-diagonal Δ: the matrix is
 // P + αΔ with the returned α, the factor's L Lᵀ is that matrix, and α stops short of the boundary
 // by about τ = 0.95 and at most one coarse grid step more (P + 1.01·α/(0.7·τ)·Δ is not definite;
-// GridStepLengthsStopWithinOneGridPointOfTheBoundary checks the grid's bounds).
+// GridStepLengthsStopWithinOneGridPointOfTheBoundary checks the grid's bounds); without the
+// factor (factor_next = false) the same α and matrix.
 TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
   using fact::sdp::detail::StepLength;
   std::mt19937 rng(29);
@@ -907,6 +908,17 @@ TEST(SdpKernels, StepLengthHandsOverTheMatrixAndFactorItTested) {
       EXPECT_LT((lower * lower.transpose() - next).cwiseAbs().maxCoeff(), 1e-12);
       const Eigen::LLT<Eigen::MatrixXd> beyond(P + 1.01 * alpha / (0.7 * 0.95) * delta);
       EXPECT_NE(beyond.info(), Eigen::Success);
+      if (block_diagonal) continue;
+      // Without the factor (factor_next = false, the interior point's X up to 48 rows): the same
+      // α on the grid, and take_trial hands over P + αΔ, positive definite; on the Lanczos path
+      // the flag changes nothing.
+      StepLength untested(n);
+      const double same = untested.full(P, L, L_inv, delta, 0.95, false);
+      EXPECT_EQ(same, alpha);
+      Eigen::MatrixXd trial;
+      untested.take_trial(trial);
+      EXPECT_LT((trial - expected).cwiseAbs().maxCoeff(), 1e-14);
+      EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(trial).info(), Eigen::Success);
     }
   }
 }

@@ -103,7 +103,8 @@ struct Workspace {
       : Lx(n, n), Lz(n, n), chol_m(m), Lz_inv(n, n), W(n, n), M(m, m), P(n, n), dx_aff(n, n),
         dx(n, n), PLt(n, n), dz_aff(n, d), dz(n, d), block_sums(n, d), rhs(m), dy_aff(m), dy(m), primal_steps(n),
         dual_steps(n) {}
-  Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n)
+  Eigen::MatrixXd Lx, Lz;                      // X = Lx Lxᵀ, Z = Lz Lzᵀ in the lower triangles (n × n;
+                                               // Lx only at the first iteration up to kGridStepMaxSize rows)
   SpdSolver chol_m;                            // the Schur complement's factorisation (m × m)
   Eigen::MatrixXd Lx_inv, Lz_inv;              // Lx⁻¹ (sized and formed only when the step lengths
                                                // read it), Lz⁻¹ (n × n, lower triangular)
@@ -203,7 +204,13 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   const int done = resume ? resume->iterations : 0;  // iterations the resumed run already took
   // X and Z are factored at the first iteration only: after it ws.Lx and ws.Lz are the factors the
   // corrector's step-length tests computed for the step taken (take_tested), or still those of X
-  // and Z when a step length is 0: two n × n factorisations fewer per iteration.
+  // and Z when a step length is 0: two n × n factorisations fewer per iteration. Up to
+  // kGridStepMaxSize rows nothing reads Lx after the first iteration's test of X, and the next X
+  // is not factored at all (StepLength::full's factor_next: X + αΔX ≻ 0 follows from the test of
+  // X + (α/τ)ΔX), a third of the primal step's Cholesky tests: random C of full rank and the
+  // paper's cost at N = 8 … 24 0.93–0.97 of the time, iterations identical (BENCHMARKS.md,
+  // session 50).
+  const bool keep_lx = n > kGridStepMaxSize;
   bool factored = false;
   double last_ap = 0, last_ad = 0;  // the last corrector's step lengths (kAffineStepFraction)
   for (int it = done; it < options.max_ipm_iterations; ++it) {
@@ -262,7 +269,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     times_block_diagonal(X, ws.dz, d, ws.dx);  // X ΔZ, through dx as scratch
     ws.P += ws.dx;
     primal_direction(X, sigma * mu, accurate, ws, ws.dx);
-    const double ap = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx, tau);
+    const double ap = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx, tau, keep_lx);
     const double ad = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz, d, tau);
     last_ap = ap;
     last_ad = ad;
@@ -272,7 +279,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     }
     // X + αΔX and Z + αΔZ exactly as their tests factored them. Z is updated by its step, not
     // formed again as C − Aᵀ(y): the two differ by rounding, a few ε of Z's diagonal blocks.
-    if (ap > 0) ws.primal_steps.take_tested(X, ws.Lx);
+    if (ap > 0) keep_lx ? ws.primal_steps.take_tested(X, ws.Lx) : ws.primal_steps.take_trial(X);
     if (ad > 0) {
       y += ad * ws.dy;
       ws.dual_steps.take_tested(Z, ws.Lz);

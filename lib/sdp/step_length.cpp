@@ -619,8 +619,9 @@ constexpr double kFineGridFloor = 0.5;
 constexpr int kCoarseGridTries = 30;
 
 template <class FormTrial, class LowestEstimate>
-double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate) {
-  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial);
+double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate,
+                        bool factor_next) {
+  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial, factor_next);
   const double lmin = lowest_estimate();
   const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   if (tau >= 1.0) return alpha;
@@ -631,13 +632,14 @@ double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, Lowest
 }
 
 template <class FormTrial>
-double StepLength::on_grid(double tau, FormTrial form_trial) {
+double StepLength::on_grid(double tau, FormTrial form_trial, bool factor_next) {
   const bool predictor = tau >= 1.0;
   int coarse_tries = 0;
   for (double alpha = 1.0; coarse_tries < kCoarseGridTries;) {
     form_trial(alpha / tau);
-    // (the corrector keeps P + αΔ itself tested and factored, for take_tested)
-    if (positive_definite() && (predictor || (form_trial(alpha), positive_definite()))) return alpha;
+    // (the corrector keeps P + αΔ itself formed, and with factor_next tested and factored, for
+    // take_tested)
+    if (positive_definite() && (predictor || (form_trial(alpha), !factor_next || positive_definite()))) return alpha;
     const bool fine = !predictor && alpha > kFineGridFloor;
     alpha *= fine ? kCorrectorStepRatio : kPredictorStepRatio;
     if (!fine) ++coarse_tries;
@@ -646,11 +648,15 @@ double StepLength::on_grid(double tau, FormTrial form_trial) {
 }
 
 double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
-                        const Eigen::MatrixXd& delta, double tau) {
+                        const Eigen::MatrixXd& delta, double tau, bool factor_next) {
   if (!delta.allFinite()) return 0.0;
-  return step(P.rows(), tau, [&](double a) { trial_ = P + a * delta; }, [&] {
-    return lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
-  });
+  return step(
+      P.rows(), tau, [&](double a) { trial_ = P + a * delta; },
+      [&] {
+        return lanczos_min_eig(L, inverse, tau,
+                               [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
+      },
+      factor_next);
 }
 
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
@@ -681,5 +687,7 @@ void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor
   next.swap(trial_);
   next_factor.swap(trial_factor_);
 }
+
+void StepLength::take_trial(Eigen::MatrixXd& next) { next.swap(trial_); }
 
 }  // namespace fact::sdp::detail

@@ -122,11 +122,13 @@ class StepLength {
   // than the grid's last point (on_grid). Above, a Lanczos estimate, which can lie beyond the
   // boundary (its Ritz value lies above λ_min): the predictor's is taken as it is, the corrector's
   // shrunk by 0.7 until P + αΔ passes a Cholesky test (so α < α_max only; 0 when 30 tries fail).
-  // With τ < 1 P + αΔ has passed a Cholesky test (take_tested hands it over). L is P's Cholesky
-  // factor (lower triangle, read above kInverseLanczosMaxSize), inverse its L⁻¹ (read when
-  // step_length_reads_inverse). 0 for a Δ that is not finite.
+  // With τ < 1 P + αΔ has passed a Cholesky test (take_tested hands it over), except on the grid
+  // with factor_next = false: there P + αΔ ≻ 0 follows from P ≻ 0 and P + (α/τ)Δ ≻ 0 (a convex
+  // combination, by a margin of (1 − τ)·λ_min(P)), and only the matrix is formed (take_trial).
+  // L is P's Cholesky factor (lower triangle, read above kInverseLanczosMaxSize), inverse its L⁻¹
+  // (read when step_length_reads_inverse). 0 for a Δ that is not finite.
   double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
-              const Eigen::MatrixXd& delta, double tau);
+              const Eigen::MatrixXd& delta, double tau, bool factor_next = true);
 
   // The same for a block-diagonal Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d).
   double block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
@@ -136,6 +138,8 @@ class StepLength {
   // into `next` and that test's factor into the lower triangle of `next_factor` (both n × n). The
   // interior point takes its next iterate and its factor from here instead of factoring it again.
   void take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor);
+  // The same for the matrix alone (a call with factor_next = false).
+  void take_trial(Eigen::MatrixXd& next);
 
  private:
   // full's and block_diagonal's step for n × n matrices: form_trial(a) writes P + aΔ into trial_,
@@ -143,10 +147,11 @@ class StepLength {
   // only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for τ < 1 shrunk by
   // 0.7 until P + αΔ passes a Cholesky test (shrink_until_passes: at most 30 tries, then 0).
   template <class FormTrial, class LowestEstimate>
-  double step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate);
-  // The grid's step (kGridStepMaxSize).
+  double step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate,
+              bool factor_next = true);
+  // The grid's step (kGridStepMaxSize); factor_next as full's.
   template <class FormTrial>
-  double on_grid(double tau, FormTrial form_trial);
+  double on_grid(double tau, FormTrial form_trial, bool factor_next);
   bool positive_definite();  // Cholesky test of trial_
 
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
