@@ -2,8 +2,8 @@
 // Up to kLdlMaxSize rows A = L D Lᵀ (L unit lower triangular, D diagonal) by plain loops on a
 // zero-padded copy, solved by two substitutions of whole padded columns and a division by D between
 // them; up to kSmallSpdSize the Cholesky factor by
-// plain loops (cholesky_lower) and two substitutions. Above it Eigen's blocked kernel in place
-// (cholesky_in_place) and its triangular solves. Eigen::LLT also computes a condition estimate (the
+// plain loops (cholesky_lower) and two substitutions. Above it cholesky_in_place (the padded
+// kernel up to 127 rows, Eigen's blocked one from 128) and Eigen's triangular solves. Eigen::LLT also computes a condition estimate (the
 // matrix's L1 norm) nothing reads: at the Newton systems' and Schur complements' usual sizes (6 …
 // 48 unknowns) 2–5 % of tight_noisy N = 5 … 32 and plain_noisy N = 3 (BENCHMARKS.md, session 23),
 // and a quarter of the factorisation of the real interior point's Schur complement at N = 100 (300
