@@ -1092,6 +1092,33 @@ void expect_cholesky_on_every_path(std::mt19937& rng) {
   }
 }
 
+// positive_definite_when_shifted on its paths (real: cholesky_lower's loops up to 48 rows,
+// cholesky_in_place above; complex: cholesky_in_place): S + t·I passes just above t = −λ_min(S)
+// and fails just below it, for an indefinite S; an infinite or NaN diagonal entry fails.
+TEST(SdpKernels, PositiveDefiniteWhenShiftedDecidesAtTheLowestEigenvalue) {
+  std::mt19937 rng(53);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int n : {6, 30, 48, 49, 64}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd S = G + G.transpose();  // indefinite
+    const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(S).eigenvalues()[0];
+    ASSERT_LT(lowest, 0.0);
+    EXPECT_TRUE(fact::sdp::detail::positive_definite_when_shifted(S, -lowest * 1.001));
+    EXPECT_FALSE(fact::sdp::detail::positive_definite_when_shifted(S, -lowest * 0.999));
+    for (const double bad : {std::numeric_limits<double>::infinity(), std::nan("")}) {
+      Eigen::MatrixXd with_bad = S;
+      with_bad(n - 1, n - 1) = bad;
+      EXPECT_FALSE(fact::sdp::detail::positive_definite_when_shifted(with_bad, -lowest * 2.0)) << bad;
+    }
+  }
+  const Eigen::MatrixXcd G = fact::test::gaussian_matrix<Eigen::MatrixXcd>(6, 6, rng, gauss);
+  const Eigen::MatrixXcd H = G + G.adjoint();
+  const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(H).eigenvalues()[0];
+  EXPECT_TRUE(fact::sdp::detail::positive_definite_when_shifted(H, -lowest * 1.001));
+  EXPECT_FALSE(fact::sdp::detail::positive_definite_when_shifted(H, -lowest * 0.999));
+}
+
 TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(23);
   expect_cholesky_on_every_path<Eigen::MatrixXd>(rng);

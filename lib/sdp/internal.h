@@ -12,6 +12,7 @@
 
 #include "fact/sdp.h"
 #include "spd_solver.h"
+#include "step_length.h"
 
 namespace fact::sdp::detail {
 
@@ -224,9 +225,18 @@ bool cholesky_in_place(Matrix& A) {
 
 // True when S + t·I passes a Cholesky test (S self-adjoint, n × n, real or complex; a copy is
 // factored): λ_min(S) > −t, up to rounding at the boundary. O(n³/3), a fraction of S's spectrum.
+// Real S up to kGridStepMaxSize rows by cholesky_lower's loops, where Eigen's unblocked kernel
+// spends most of its time on overhead (the real staircase's test of a level at n = 6 … 12;
+// BENCHMARKS.md, session 50).
 template <class Matrix>
 bool positive_definite_when_shifted(Matrix S, double t) {
   S.diagonal().array() += t;
+  if constexpr (!Eigen::NumTraits<typename Matrix::Scalar>::IsComplex) {
+    if (S.rows() <= kGridStepMaxSize) {
+      Matrix L(S.rows(), S.cols());  // the factor, lower triangle
+      return cholesky_lower(S, L) && L.diagonal().allFinite();  // (an infinite pivot passes the loops)
+    }
+  }
   return cholesky_in_place(S);
 }
 
