@@ -208,7 +208,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   // kGridStepMaxSize rows nothing reads Lx after the first iteration's test of X, and the next X
   // is not factored at all (StepLength::full's factor_next: X + αΔX ≻ 0 follows from the test of
   // X + (α/τ)ΔX), a third of the primal step's Cholesky tests: random C of full rank and the
-  // paper's cost at N = 8 … 24 0.93–0.97 of the time, iterations identical (BENCHMARKS.md,
+  // paper's cost at N = 5 … 24 0.955–0.99 of the time, iterations identical (BENCHMARKS.md,
   // session 50).
   const bool keep_lx = n > kGridStepMaxSize;
   bool factored = false;

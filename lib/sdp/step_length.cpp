@@ -267,7 +267,8 @@ namespace {
 // and from row n on, so that every update runs over whole 8-row blocks, from the block that holds
 // the first row it needs to row P, with no remainder loop (the rows above that first row take
 // finite values nothing reads; the rows from n on stay 0). Columns k and k + 1 are finished
-// together and taken off each later column in one pass.
+// together and taken off each later column in one pass. The copy takes at most 128 KiB of stack
+// (P = 128).
 template <int P>
 bool cholesky_padded(Eigen::MatrixXd& A) {
   alignas(64) double a[P * P];
