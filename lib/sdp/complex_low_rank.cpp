@@ -211,15 +211,12 @@ constexpr Eigen::Index kSquaredPowerMaxSize = 8;  // up to which it iterates on 
 
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H) {
   const Eigen::Index N = H.rows();
-  MatrixXcd L = H;  // H + δI, then its Cholesky factor (lower triangle)
-  L.diagonal().array() += inverse_iteration_shift(H);
-  if (!cholesky_in_place(L)) return MatrixXcd();
-  MatrixXcd L_inv, W;  // L⁻¹ and W = (H + δI)⁻¹, N × N
-  invert_lower_factor(L, L_inv);
-  gram_of_lower_factor(L_inv, W);
+  MatrixXcd W;  // (H + δI)⁻¹, N × N
+  if (!shifted_inverse(H, W)) return MatrixXcd();
   if (N <= kSquaredPowerMaxSize) {  // W² (its product costs less than the steps it saves there)
-    times_thin(W, W, L_inv);
-    W.swap(L_inv);
+    MatrixXcd squared;  // N × N
+    times_thin(W, W, squared);
+    W.swap(squared);
   }
   MatrixXcd v(N, 1), w(N, 1);  // iterates
   for (Eigen::Index i = 0; i < N; ++i) v(i, 0) = generic_start_entry(i, 0);

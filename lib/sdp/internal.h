@@ -225,19 +225,18 @@ bool cholesky_in_place(Matrix& A) {
 
 // True when S + t·I passes a Cholesky test (S self-adjoint, n × n, real or complex; a copy is
 // factored): λ_min(S) > −t, up to rounding at the boundary. O(n³/3), a fraction of S's spectrum.
-// Real S up to kGridStepMaxSize rows by cholesky_lower's loops, where Eigen's unblocked kernel
-// spends most of its time on overhead (the real staircase's test of a level at n = 6 … 12;
-// BENCHMARKS.md, session 50).
+// Real S by factor_lower (cholesky_lower's loops up to kGridStepMaxSize rows, where Eigen's
+// unblocked kernel spends most of its time on overhead: the real staircase's test of a level at
+// n = 6 … 12; BENCHMARKS.md, session 50).
 template <class Matrix>
 bool positive_definite_when_shifted(Matrix S, double t) {
   S.diagonal().array() += t;
   if constexpr (!Eigen::NumTraits<typename Matrix::Scalar>::IsComplex) {
-    if (S.rows() <= kGridStepMaxSize) {
-      Matrix L(S.rows(), S.cols());  // the factor, lower triangle
-      return cholesky_lower(S, L) && L.diagonal().allFinite();  // (an infinite pivot passes the loops)
-    }
+    Matrix L(S.rows(), S.cols());  // the factor, lower triangle
+    return factor_lower(S, L) && L.diagonal().allFinite();  // (an infinite pivot passes the loops)
+  } else {
+    return cholesky_in_place(S);
   }
-  return cholesky_in_place(S);
 }
 
 // All eigenvalues of the self-adjoint A (n × n, n ≥ 1, real or complex), ascending, and unit
@@ -280,6 +279,40 @@ inline double generic_start_entry(Eigen::Index i, int j) {
 // with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
 // M + δI is not positive definite (M indefinite), lowest_eigenpairs (O(n³) once) is used instead.
 // The real staircase and the complex one start from it.
+// W = (M + δI)⁻¹ (n × n) for the self-adjoint M (real or complex), δ = inverse_iteration_shift(M),
+// by the Schur-form Newton's kernels: Cholesky, L⁻¹, L⁻ᴴ L⁻¹. False when M + δI fails its Cholesky
+// test (W then untouched). The spectral starts' power and subspace iterations multiply by it
+// (bottom_vector_by_inverse, bottom_vectors_by_inverse).
+template <class Matrix>
+bool shifted_inverse(const Matrix& M, Matrix& W) {
+  Matrix L = M;  // M + δI, then its Cholesky factor (lower triangle), n × n
+  L.diagonal().array() += inverse_iteration_shift(M);
+  if (!cholesky_in_place(L)) return false;
+  Matrix L_inv;  // L⁻¹, n × n
+  invert_lower_factor(L, L_inv);
+  gram_of_lower_factor(L_inv, W);
+  return true;
+}
+
+// V's columns (n × m) made orthonormal in order: Gram–Schmidt twice, each column normalised.
+template <class Matrix>
+void orthonormalize_columns(Matrix& V) {
+  for (Eigen::Index j = 0; j < V.cols(); ++j) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (Eigen::Index i = 0; i < j; ++i) V.col(j) -= V.col(i).dot(V.col(j)) * V.col(i);
+    V.col(j).normalize();
+  }
+}
+
+// Rayleigh–Ritz on span(V) (V n × m, orthonormal columns): the k vectors (n × k) of M's smallest
+// Ritz values there.
+template <class Matrix>
+Matrix bottom_ritz_vectors(const Matrix& M, const Matrix& V, int k) {
+  const Matrix T = V.adjoint() * M * V;  // m × m
+  const Eigen::SelfAdjointEigenSolver<Matrix> small(T);
+  return V * small.eigenvectors().leftCols(k);
+}
+
 template <class Matrix>
 Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const Eigen::Index n = M.rows();
@@ -302,15 +335,9 @@ Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   for (int step = 0; step < 12; ++step) {
     lower.solveInPlace(V);             // L⁻¹ V
     lower.adjoint().solveInPlace(V);   // (M + δI)⁻¹ V
-    for (Eigen::Index j = 0; j < V.cols(); ++j) {  // orthonormal columns, Gram–Schmidt twice
-      for (int pass = 0; pass < 2; ++pass)
-        for (Eigen::Index i = 0; i < j; ++i) V.col(j) -= V.col(i).dot(V.col(j)) * V.col(i);
-      V.col(j).normalize();
-    }
+    orthonormalize_columns(V);
   }
-  const Matrix T = V.adjoint() * M * V;  // Rayleigh–Ritz on the subspace, (k + 2) × (k + 2)
-  Eigen::SelfAdjointEigenSolver<Matrix> small(T);
-  return V * small.eigenvectors().leftCols(k);
+  return bottom_ritz_vectors(M, V, k);
 }
 
 // Householder reduction of the symmetric A (n × n, lower triangle used; destroyed) to the

@@ -5,7 +5,6 @@
 #include <random>
 
 #include "internal.h"
-#include "step_length.h"
 
 namespace fact::sdp::detail {
 
@@ -126,28 +125,18 @@ constexpr int kInverseStartSteps = 12;
 // Empty when C + δI fails its Cholesky test.
 Eigen::MatrixXd bottom_vectors_by_inverse(const Eigen::MatrixXd& C, int k) {
   const Eigen::Index n = C.rows();
-  Eigen::MatrixXd L = C;  // C + δI, then its Cholesky factor (lower triangle), n × n
-  L.diagonal().array() += inverse_iteration_shift(C);
-  if (!cholesky_in_place(L)) return Eigen::MatrixXd();
-  Eigen::MatrixXd L_inv, W;  // L⁻¹ and W = (C + δI)⁻¹, n × n
-  invert_lower_factor(L, L_inv);
-  gram_of_lower_factor(L_inv, W);
+  Eigen::MatrixXd W;  // (C + δI)⁻¹, n × n
+  if (!shifted_inverse(C, W)) return Eigen::MatrixXd();
   const int m = k + 2;
   Eigen::MatrixXd V(n, m), next(n, m);  // orthonormal iterates, n × m
   for (Eigen::Index i = 0; i < n; ++i)
     for (int j = 0; j < m; ++j) V(i, j) = generic_start_entry(i, j);
   for (int step = 0; step < kInverseStartSteps; ++step) {
     next.noalias() = W * V;
-    for (int j = 0; j < m; ++j) {
-      for (int pass = 0; pass < 2; ++pass)
-        for (int i = 0; i < j; ++i) next.col(j) -= next.col(i).dot(next.col(j)) * next.col(i);
-      next.col(j).normalize();
-    }
+    orthonormalize_columns(next);
     V.swap(next);
   }
-  const Eigen::MatrixXd T = V.transpose() * C * V;  // Rayleigh–Ritz, m × m
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> small(T);
-  return V * small.eigenvectors().leftCols(k);
+  return bottom_ritz_vectors(C, V, k);
 }
 
 // Spectral start: the bottom-d eigenvectors of C, each block projected to orthonormal rows.
