@@ -1448,6 +1448,41 @@ TEST(SdpKernels, PivotedAndLeadingFactorsKeepTheLeadingPartOfX) {
   EXPECT_LT((E * E.transpose() - Y * Y.transpose()).cwiseAbs().maxCoeff(), 1e-9);
 }
 
+// unit_diagonal_blocks maps X to D^{-1/2} X D^{-1/2}, D = blkdiag(X_ii): against Eigen's inverse
+// square root of each block (d = 2, the closed form; d = 1), on a random positive definite X whose
+// blocks are far from I and on one whose blocks are I up to a drift of 1e-9; the result's blocks
+// are I and it stays positive definite. A block that is not positive definite gives non-finite
+// entries, as Eigen's decomposition did.
+TEST(SdpKernels, UnitDiagonalBlocksScaleByEachBlocksInverseSquareRoot) {
+  std::mt19937 rng(29);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const Eigen::Index n = 10;
+  const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+  const Eigen::MatrixXd far = G * G.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd near = Eigen::MatrixXd::Identity(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) near(i, j) = near(j, i) = near(i, j) + 1e-9 * gauss(rng) + (i != j ? 0.05 : 0.0);
+  const Eigen::MatrixXd* cases[] = {&far, &near};
+  for (const Eigen::MatrixXd* X0 : cases)
+    for (int d : {1, 2}) {
+      Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n);  // blkdiag(X_ii)^{-1/2} by Eigen
+      for (Eigen::Index i = 0; i < n; i += d)
+        D.block(i, i, d, d) = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X0->block(i, i, d, d)).operatorInverseSqrt();
+      const Eigen::MatrixXd expected = D * *X0 * D;
+      Eigen::MatrixXd X = *X0;
+      fact::sdp::detail::unit_diagonal_blocks(X, d);
+      const double scale = expected.cwiseAbs().maxCoeff();
+      EXPECT_LT((X - expected).cwiseAbs().maxCoeff(), 1e-13 * scale) << "d = " << d << (X0 == &far ? ", far" : ", near");
+      for (Eigen::Index i = 0; i < n; i += d)
+        EXPECT_LT((X.block(i, i, d, d) - Eigen::MatrixXd::Identity(d, d)).cwiseAbs().maxCoeff(), 1e-13) << "block " << i;
+      EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(X).info(), Eigen::Success);
+    }
+  Eigen::MatrixXd indefinite = far;
+  indefinite.block(2, 2, 2, 2) << 1.0, 2.0, 2.0, 1.0;  // eigenvalues 3 and −1
+  fact::sdp::detail::unit_diagonal_blocks(indefinite, 2);
+  EXPECT_FALSE(indefinite.block(2, 0, 2, n).allFinite());
+}
+
 // Newton's system in Schur form against the one in tangent bases (newton_refine's NewtonSystem):
 // the damped system Proj(S V) + λV = −S Y is the same, so from a point near a rank-r optimum one
 // step of each lands at the same factor, and from farther out both converge to the same optimum.

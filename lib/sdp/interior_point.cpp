@@ -295,11 +295,50 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   return out;
 }
 
+namespace {
+
+// A^{-1/2} for a symmetric positive definite 2 × 2 A = [[a, b], [b, c]] in closed form: with
+// s = √det A and t = √(a + c + 2s), A^{1/2} = (A + sI)/t, and since det(A + sI) = s·t²,
+// A^{-1/2} = [[c + s, −b], [−b, a + s]] / (s·t). False (R untouched) when A is not positive
+// definite or not finite.
+bool inverse_sqrt_2x2(double a, double b, double c, Eigen::Matrix2d& R) {
+  const double det = a * c - b * b;
+  if (!(a > 0 && det > 0 && det <= std::numeric_limits<double>::max() && a + c <= std::numeric_limits<double>::max()))
+    return false;
+  const double s = std::sqrt(det), t = std::sqrt(a + c + 2 * s), scale = 1.0 / (s * t);
+  R << (c + s) * scale, -b * scale, -b * scale, (a + s) * scale;
+  return true;
+}
+
+}  // namespace
+
+// d = 2 by inverse_sqrt_2x2 on each block, applied to its two rows and columns in place; d = 1
+// by 1/√x. Eigen's solver on each block (a dynamic 2 × 2 decomposition and two products with
+// temporaries) took 2.8 % of random full rank N = 8 (BENCHMARKS.md, session 51); it stays for a
+// block that is not positive definite, where its result (NaN or inf entries) is kept.
 void unit_diagonal_blocks(Eigen::MatrixXd& X, int d) {
-  for (Eigen::Index i = 0; i < X.rows(); i += d) {
-    const Eigen::MatrixXd root = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X.block(i, i, d, d)).operatorInverseSqrt();
-    X.middleRows(i, d) = root * X.middleRows(i, d);
-    X.middleCols(i, d) = X.middleCols(i, d) * root;
+  const Eigen::Index n = X.rows();
+  for (Eigen::Index i = 0; i < n; i += d) {
+    if (d == 1) {
+      const double root = 1.0 / std::sqrt(X(i, i));
+      X.row(i) *= root;
+      X.col(i) *= root;
+      continue;
+    }
+    Eigen::Matrix2d R;  // X_ii^{-1/2}
+    if (!inverse_sqrt_2x2(X(i, i), X(i + 1, i), X(i + 1, i + 1), R)) {  // (the lower triangle, as Eigen reads)
+      R = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(X.block(i, i, d, d)).operatorInverseSqrt();
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {  // rows i, i + 1 ← R · them
+      const double u = X(i, j), v = X(i + 1, j);
+      X(i, j) = R(0, 0) * u + R(0, 1) * v;
+      X(i + 1, j) = R(1, 0) * u + R(1, 1) * v;
+    }
+    for (Eigen::Index j = 0; j < n; ++j) {  // columns i, i + 1 ← them · R
+      const double u = X(j, i), v = X(j, i + 1);
+      X(j, i) = u * R(0, 0) + v * R(1, 0);
+      X(j, i + 1) = u * R(0, 1) + v * R(1, 1);
+    }
   }
 }
 
