@@ -748,10 +748,19 @@ void times_thin(const Eigen::MatrixXcd& A, const Eigen::MatrixXcd& B, Eigen::Mat
 Eigen::MatrixXcd bottom_vector_by_inverse(const Eigen::MatrixXcd& H);
 
 // The real counterpart for the real staircase's spectral start (low_rank.cpp, 16 … 64 rows): C's
-// bottom k eigenvectors (n × k, orthonormal) by a fixed number of subspace steps on
-// W = (C + δI)⁻¹ with two guard vectors and a Rayleigh–Ritz step; empty when C + δI fails its
-// Cholesky test.
+// bottom k eigenvectors (n × k, orthonormal) by kInverseStartSteps subspace steps on
+// W = (C + δI)⁻¹ with two guard vectors and a Rayleigh–Ritz step, each step shrinking the error
+// by (λ_k + δ)/(λ_{k+3} + δ); empty when C + δI fails its Cholesky test.
 Eigen::MatrixXd bottom_vectors_by_inverse(const Eigen::MatrixXd& C, int k);
+// Its steps. 6 against the 12 that bottom_eigenvectors' iteration takes: sweep (6 seeds; N = 8 …
+// 32; the plain form and the paper's cost with 2N and 3N rounds at noise 0 … 0.05, random C of rank
+// 3, N + 1 and full; interleaved, fastest of two runs): the paper's noise-free cost 0.86–0.97 of the
+// time (the start is exact after 6 steps there; with 2N rounds from N = 16 one or two Newton steps
+// more or fewer), random C of rank 3, whose start is any vector of a large null space, 0.79–1.01
+// with iterations moving both ways, every other kind 0.90–1.03 with the same iterations, 0.99 in
+// all; no status or objective changed. The start of random full-rank C is then off by up to 3e-4
+// (n = 16), which its Newton steps do not feel (BENCHMARKS.md, session 51).
+constexpr int kInverseStartSteps = 6;
 
 // The shift a Schur-form Newton step skips past (0: none): carried_failure, the largest shift
 // whose Cholesky failed (or that was skipped) in the last step, when it is at or above this step's

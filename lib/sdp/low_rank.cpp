@@ -110,9 +110,6 @@ static Eigen::MatrixXd escape_saddle(const Eigen::MatrixXd& Y, const Eigen::Vect
 // reduction, above from bottom_eigenvectors' inverse iteration by triangular solves.
 constexpr Eigen::Index kInverseStartMinSize = 16;
 constexpr Eigen::Index kInverseStartMaxSize = 64;
-// Steps of bottom_vectors_by_inverse, as bottom_eigenvectors' iteration takes.
-constexpr int kInverseStartSteps = 12;
-
 // C's bottom k eigenvectors (n × k, orthonormal) by subspace iteration on W = (C + δI)⁻¹ (δ:
 // inverse_iteration_shift) with two guard vectors: W formed once by the interior point's kernels
 // (Cholesky, L⁻¹, L⁻ᵀ L⁻¹), then kInverseStartSteps products W·V (n × (k + 2)), each followed by
@@ -120,8 +117,8 @@ constexpr int kInverseStartSteps = 12;
 // pairs of triangular solves, which Eigen runs slowly at these sizes, and the tridiagonal
 // reduction's QL sweeps and back-transformation: random C of full rank at n = 16 / 24 / 32 / 48 /
 // 64 took 5.6 / 10.0 / 16.0 / 34.0 / 59.9 µs by the reduction (8.4 / 12.3 / 16.2 / 25.8 / 36.2 µs
-// by triangular solves), 4.9 / 6.6 / 8.9 / 15.0 / 25.9 µs this way, the same subspace to 4e-12 …
-// 7e-8; at n = 100 the triangular solves were faster (73 against 93 µs; BENCHMARKS.md, session 50).
+// by triangular solves), 4.9 / 6.6 / 8.9 / 15.0 / 25.9 µs this way with 12 steps, the same subspace
+// to 4e-12 … 7e-8 (6 steps since session 51: kInverseStartSteps); at n = 100 the triangular solves were faster (73 against 93 µs; BENCHMARKS.md, session 50).
 // Empty when C + δI fails its Cholesky test.
 Eigen::MatrixXd bottom_vectors_by_inverse(const Eigen::MatrixXd& C, int k) {
   const Eigen::Index n = C.rows();
