@@ -165,8 +165,7 @@ int rank_one_newton(const Eigen::MatrixXcd& H, Eigen::MatrixXcd& Y, int max_iter
 // Every matrix of one Schur-form Newton run, allocated once (N × N complex unless noted).
 struct SchurWorkspace {
   SchurWorkspace(Eigen::Index N, Eigen::Index p)
-      : HY(N, p), WY(N, p), scaled(N, p), next(N, p), next_HY(N, p), longer(N, p), longer_HY(N, p), S(N, N), L(N, N),
-        L_inv(N, N),
+      : HY(N, p), WY(N, p), scaled(N, p), next(N, p), next_HY(N, p), longer(N, p), longer_HY(N, p), S(N, N),
         W(N, N), X(N, N), M(N, N), llt(N), mu(N), r(N), nu(N) {}
   MatrixXcd HY;              // H Y, N × p
   MatrixXcd WY;              // W Y, N × p
@@ -174,7 +173,8 @@ struct SchurWorkspace {
   MatrixXcd next, next_HY;   // trial factor and H · it, N × p
   MatrixXcd longer, longer_HY;  // a longer trial along the same step and H · it, N × p
   MatrixXcd S;               // H − diag(μ)
-  MatrixXcd L, L_inv;        // S + λI = L Lᴴ (lower triangle) and L⁻¹
+  MatrixXcd L, L_inv;        // S + λI = L Lᴴ (lower triangle) and L⁻¹: sized when first used (above
+                             // kSweepInverseMaxSize rows)
   MatrixXcd W;               // (S + λI)⁻¹
   MatrixXcd X;               // Y Yᴴ
   MatrixXd M;                // Schur complement Re(W_ij conj(X_ij)), N × N real
@@ -245,17 +245,23 @@ namespace {
 // W S Y = Y − λ W Y, the constraints give M ν = −r, M_ij = Re(W_ij conj(X_ij)) with X = Y Yᴴ
 // (positive definite: the interior point's Schur complement), r_i = 1 − λ Re⟨y_i, (W Y)_i⟩, and
 // then Y + V = W diag(λ − ν) Y. ws.next gets its rows normalised (the retraction). Cost: one
-// N × N complex factorisation, inversion and product, and an N × N real factorisation, whatever
-// p is. M is positive definite in exact arithmetic whenever S + λI is (Schur product theorem);
-// its factorisation fails only by rounding.
+// N × N complex inversion (up to kSweepInverseMaxSize rows by hermitian_inverse_small's sweeps,
+// above by Cholesky, L⁻¹ and L⁻ᴴ L⁻¹; the sweeps took tight_noisy N = 6 / 12 from 18.0 / 47.5 to
+// 16.3 / 41.7 µs, BENCHMARKS.md, session 51) and an N × N real factorisation, whatever p is. M is
+// positive definite in exact arithmetic whenever S + λI is (Schur product theorem); its
+// factorisation fails only by rounding.
 enum class Trial { formed, shift_too_small, schur_not_definite };
 Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) {
   const Eigen::Index N = Y.rows();
-  ws.L = ws.S;
-  ws.L.diagonal().array() += lambda;
-  if (!cholesky_in_place(ws.L)) return Trial::shift_too_small;
-  invert_lower_factor(ws.L, ws.L_inv);
-  gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᴴ L⁻¹
+  if (N <= kSweepInverseMaxSize) {
+    if (!hermitian_inverse_small(ws.S, lambda, ws.W)) return Trial::shift_too_small;
+  } else {
+    ws.L = ws.S;
+    ws.L.diagonal().array() += lambda;
+    if (!cholesky_in_place(ws.L)) return Trial::shift_too_small;
+    invert_lower_factor(ws.L, ws.L_inv);
+    gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᴴ L⁻¹
+  }
   ws.M = (ws.W.array() * ws.X.array().conjugate()).real();
   if (!ws.llt.factor(ws.M)) return Trial::schur_not_definite;
   times_thin(ws.W, Y, ws.WY);

@@ -441,6 +441,60 @@ void invert_complex_lower_padded(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eig
     for (int i = 0; i < n; ++i) inverse(i, j) = {X(i, j), Y(i, j)};
 }
 
+// hermitian_inverse_small on P × P padded copies (n ≤ P): re and im hold A + shift·I and zeros
+// beyond n. Pivot k takes a_ik a_kj / a_kk off every other entry (a_kj = conj(a_jk)), then
+// column k becomes a_ik / a_kk, row k a_kj / a_kk and the pivot −1 / a_kk; after the n sweeps the
+// copies hold −A⁻¹, whose lower triangle is written out, mirrored and negated.
+template <int P>
+bool hermitian_inverse_padded(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W) {
+  const int n = static_cast<int>(A.rows());
+  alignas(64) double re[P * P], im[P * P];
+  for (int j = 0; j < P; ++j)
+    for (int i = 0; i < P; ++i) {
+      const bool inside = i < n && j < n;
+      re[j * P + i] = inside ? A(i, j).real() + (i == j ? shift : 0.0) : 0.0;
+      im[j * P + i] = inside ? A(i, j).imag() : 0.0;
+    }
+  alignas(64) double column_re[P], column_im[P];  // column k, its pivot entry zeroed
+  for (int k = 0; k < n; ++k) {
+    const double pivot = re[k * P + k];
+    if (!(pivot > 0)) return false;
+    const double reciprocal = 1.0 / pivot;
+    for (int i = 0; i < P; ++i) {
+      column_re[i] = re[k * P + i];
+      column_im[i] = im[k * P + i];
+    }
+    column_re[k] = column_im[k] = 0.0;
+    for (int j = 0; j < n; ++j) {
+      if (j == k) continue;
+      const double factor_re = column_re[j] * reciprocal, factor_im = -column_im[j] * reciprocal;  // a_kj / a_kk
+      double* __restrict wr = re + j * P;
+      double* __restrict wi = im + j * P;
+      for (int i = 0; i < P; ++i) {
+        wr[i] -= column_re[i] * factor_re - column_im[i] * factor_im;
+        wi[i] -= column_re[i] * factor_im + column_im[i] * factor_re;
+      }
+      wr[k] = factor_re;
+      wi[k] = factor_im;
+    }
+    for (int i = 0; i < P; ++i) {
+      re[k * P + i] = column_re[i] * reciprocal;
+      im[k * P + i] = column_im[i] * reciprocal;
+    }
+    re[k * P + k] = -reciprocal;
+    im[k * P + k] = 0.0;
+  }
+  W.resize(n, n);
+  for (int j = 0; j < n; ++j) {
+    W(j, j) = -re[j * P + j];
+    for (int i = j + 1; i < n; ++i) {
+      W(i, j) = {-re[j * P + i], -im[j * P + i]};
+      W(j, i) = std::conj(W(i, j));
+    }
+  }
+  return true;
+}
+
 // invert_complex_lower_padded at the smallest padded size (a multiple of 4) that holds L. Not
 // inlined, as invert_lower_small.
 EIGEN_DONT_INLINE void invert_complex_lower_small(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eigen::OuterStride<>>& L,
@@ -572,6 +626,18 @@ void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   // with a rounding-sized imaginary part): W is made Hermitian from it (its readers take either).
   W.diagonal() = W.diagonal().real().cast<std::complex<double>>();
   for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
+}
+
+bool hermitian_inverse_small(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W) {
+  const Eigen::Index n = A.rows();
+  eigen_assert(n <= kSweepInverseMaxSize);
+  static_assert(kSweepInverseMaxSize <= 32, "a padded copy larger than P = 32");
+  if (n <= 4) return hermitian_inverse_padded<4>(A, shift, W);
+  if (n <= 8) return hermitian_inverse_padded<8>(A, shift, W);
+  if (n <= 12) return hermitian_inverse_padded<12>(A, shift, W);
+  if (n <= 16) return hermitian_inverse_padded<16>(A, shift, W);
+  if (n <= 24) return hermitian_inverse_padded<24>(A, shift, W);
+  return hermitian_inverse_padded<32>(A, shift, W);
 }
 
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {

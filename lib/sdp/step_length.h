@@ -67,6 +67,18 @@ bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
+// Up to this many rows hermitian_inverse_small inverts a Hermitian positive definite matrix.
+constexpr Eigen::Index kSweepInverseMaxSize = 32;
+
+// W = (A + shift·I)⁻¹ for a Hermitian A (n × n, n ≤ kSweepInverseMaxSize), n × n with both
+// triangles (the lower one mirrored, the diagonal real), by Gauss–Jordan sweeps on padded split
+// real and imaginary copies: every pivot's update runs down whole padded columns, n³ complex
+// multiply-adds in all. False when a pivot is not positive (A + shift·I not positive definite:
+// the pivots are those of its L D Lᴴ), W then undefined. Against Cholesky, L⁻¹ and L⁻ᴴ L⁻¹
+// (n³/2 multiply-adds in three passes with short loops): n = 6 / 12 / 24 / 32 took 140 / 410 /
+// 1890 / 3790 ns against 240 / 730 / 3150 / 5880 ns (BENCHMARKS.md, session 51).
+bool hermitian_inverse_small(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W);
+
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal, as invert_lower_factor
 // writes), into W (n × n, both triangles): Z⁻¹ = Lz⁻ᴴ Lz⁻¹ from Lz⁻¹. Real: recursive 2 × 2
 // blocking above 32 × 32, about n³/3 multiply-adds instead of n³. Complex: loops up to 12 rows,
