@@ -1222,37 +1222,43 @@ void expect_triangular_products_match(std::mt19937& rng) {
         }
 }
 
-// hermitian_inverse_small's W = (A + sI)⁻¹ against Eigen's LLT inverse, for n = 1 … 32 (every
-// padded size, full and partly filled) and a shift that moves A's diagonal: W Hermitian exactly
-// (its upper triangle the lower one's conjugate, its diagonal real), into an output of the wrong
+// inverse_by_sweeps's W = (A + sI)⁻¹ against Eigen's LLT inverse, real and complex, for n = 1 … 32
+// (every padded size, full and partly filled) and a shift that moves A's diagonal: W symmetric
+// or Hermitian exactly (its upper triangle the lower one's conjugate), into an output of the wrong
 // size with stale entries; false for an indefinite A + sI (λ_min = −0.1 after the shift) and for a
 // NaN entry.
-TEST(SdpKernels, HermitianInverseSmallMatchesTheCholeskyInverse) {
-  std::mt19937 rng(31);
+template <class Matrix>
+void check_inverse_by_sweeps(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (Eigen::Index n = 1; n <= fact::sdp::detail::kSweepInverseMaxSize; ++n) {
-    SCOPED_TRACE(testing::Message() << "n = " << n);
-    const Eigen::MatrixXcd G = fact::test::gaussian_matrix<Eigen::MatrixXcd>(n, n, rng, gauss);
-    const Eigen::MatrixXcd A = G * G.adjoint() + 0.5 * Eigen::MatrixXcd::Identity(n, n);  // Hermitian, λ_min ≥ 0.5
+    SCOPED_TRACE(testing::Message() << "n = " << n << (Eigen::NumTraits<typename Matrix::Scalar>::IsComplex ? ", complex" : ", real"));
+    const Matrix G = fact::test::gaussian_matrix<Matrix>(n, n, rng, gauss);
+    const Matrix A = G * G.adjoint() + 0.5 * Matrix::Identity(n, n);  // λ_min ≥ 0.5
     const double shift = 0.25;
-    const Eigen::MatrixXcd shifted = A + shift * Eigen::MatrixXcd::Identity(n, n);
-    const Eigen::MatrixXcd expected = shifted.llt().solve(Eigen::MatrixXcd::Identity(n, n));
-    Eigen::MatrixXcd W = Eigen::MatrixXcd::Constant(n + 3, 2, 7.0);
-    ASSERT_TRUE(fact::sdp::detail::hermitian_inverse_small(A, shift, W));
+    const Matrix shifted = A + shift * Matrix::Identity(n, n);
+    const Matrix expected = shifted.llt().solve(Matrix::Identity(n, n));
+    Matrix W = Matrix::Constant(n + 3, 2, 7.0);
+    ASSERT_TRUE(fact::sdp::detail::inverse_by_sweeps(A, shift, W));
     ASSERT_EQ(W.rows(), n);
     ASSERT_EQ(W.cols(), n);
     EXPECT_LT((W - expected).norm(), 1e-12 * expected.norm());
-    EXPECT_LT((shifted * W - Eigen::MatrixXcd::Identity(n, n)).norm(), 1e-11);
+    EXPECT_LT((shifted * W - Matrix::Identity(n, n)).norm(), 1e-11);
     EXPECT_TRUE(W == W.adjoint());
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> eig(A, Eigen::EigenvaluesOnly);
-    EXPECT_FALSE(fact::sdp::detail::hermitian_inverse_small(A, -eig.eigenvalues()[0] - 0.1, W));
-    Eigen::MatrixXcd broken = A;
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig(A, Eigen::EigenvaluesOnly);
+    EXPECT_FALSE(fact::sdp::detail::inverse_by_sweeps(A, -eig.eigenvalues()[0] - 0.1, W));
+    Matrix broken = A;
     broken(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
-    broken(0, n - 1) = std::conj(broken(n - 1, 0));
+    broken(0, n - 1) = broken(n - 1, 0);
     if (n > 1) {
-      EXPECT_FALSE(fact::sdp::detail::hermitian_inverse_small(broken, shift, W));
+      EXPECT_FALSE(fact::sdp::detail::inverse_by_sweeps(broken, shift, W));
     }
   }
+}
+
+TEST(SdpKernels, InverseBySweepsMatchesTheCholeskyInverse) {
+  std::mt19937 rng(31);
+  check_inverse_by_sweeps<Eigen::MatrixXd>(rng);
+  check_inverse_by_sweeps<Eigen::MatrixXcd>(rng);
 }
 
 // The complex staircase's loops against Eigen's products: factor_gram's X = Y Yᴴ, both triangles

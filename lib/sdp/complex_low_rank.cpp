@@ -245,7 +245,7 @@ namespace {
 // W S Y = Y − λ W Y, the constraints give M ν = −r, M_ij = Re(W_ij conj(X_ij)) with X = Y Yᴴ
 // (positive definite: the interior point's Schur complement), r_i = 1 − λ Re⟨y_i, (W Y)_i⟩, and
 // then Y + V = W diag(λ − ν) Y. ws.next gets its rows normalised (the retraction). Cost: one
-// N × N complex inversion (up to kSweepInverseMaxSize rows by hermitian_inverse_small's sweeps,
+// N × N complex inversion (up to kSweepInverseMaxSize rows by inverse_by_sweeps's sweeps,
 // above by Cholesky, L⁻¹ and L⁻ᴴ L⁻¹; the sweeps took tight_noisy N = 6 / 12 from 18.0 / 47.5 to
 // 16.3 / 41.7 µs, BENCHMARKS.md, session 51) and an N × N real factorisation, whatever p is. M is
 // positive definite in exact arithmetic whenever S + λI is (Schur product theorem); its
@@ -254,7 +254,7 @@ enum class Trial { formed, shift_too_small, schur_not_definite };
 Trial schur_newton_trial(const MatrixXcd& Y, double lambda, SchurWorkspace& ws) {
   const Eigen::Index N = Y.rows();
   if (N <= kSweepInverseMaxSize) {
-    if (!hermitian_inverse_small(ws.S, lambda, ws.W)) return Trial::shift_too_small;
+    if (!inverse_by_sweeps(ws.S, lambda, ws.W)) return Trial::shift_too_small;
   } else {
     ws.L = ws.S;
     ws.L.diagonal().array() += lambda;

@@ -220,13 +220,14 @@ int dense_newton(const Eigen::MatrixXd& C, int d, Eigen::MatrixXd& Y, int max_it
 // block constraints.
 struct SchurWorkspace {
   SchurWorkspace(Eigen::Index n, int d, Eigen::Index r, int m)
-      : CY(n, r), lambda(n, d), S(n, n), X(n, n), SY(n, r), shifted(n, n), L(n, n), L_inv(n, n), W(n, n), WSY(n, r),
+      : CY(n, r), lambda(n, d), S(n, n), X(n, n), SY(n, r), W(n, n), WSY(n, r),
         M(m, m), llt(m), rhs(m), nu(m), normal(n, d), pushed(n, r), next(n, r), next_CY(n, r) {}
   Eigen::MatrixXd CY;        // C Y, n × r
   Eigen::MatrixXd lambda;    // Λ(Y) = SymBlockDiag(C Y Yᵀ), d × d blocks stacked, n × d
   Eigen::MatrixXd S;         // C − blkdiag(Λ), n × n
   Eigen::MatrixXd X;         // Y Yᵀ, n × n
   Eigen::MatrixXd SY;        // S Y, n × r
+  // Above kSweepInverseMaxSize rows (sized when first used):
   Eigen::MatrixXd shifted;   // S + λI, n × n (its lower triangle is factored)
   Eigen::MatrixXd L, L_inv;  // S + λI = L Lᵀ (lower triangle) and L⁻¹ (zeros above), n × n
   Eigen::MatrixXd W;         // (S + λI)⁻¹, n × n
@@ -249,22 +250,29 @@ struct SchurWorkspace {
 // gradient, so the step keeps its digits near the optimum, where W grows as 1/λ (the equivalent
 // Y + V = W blkdiag(λI − Ν) Y cancels terms of order 1 there and lost 4 of the step's digits at
 // λ = 5e-9). M is the interior point's Schur complement for X and W, positive definite when
-// S + λI is (X_ii = I); its factorisation fails only by rounding. Cost: one n × n factorisation,
-// inversion and product, and an m × m factorisation, whatever r is. False when S + λI or M does not
+// S + λI is (X_ii = I); its factorisation fails only by rounding. Cost: one n × n inversion (up to
+// kSweepInverseMaxSize rows by inverse_by_sweeps, above by Cholesky, L⁻¹ and L⁻ᵀ L⁻¹; the sweeps
+// took random full rank N = 6 / 8 / 12 to 0.96 / 0.99 / 1.00 of the time, BENCHMARKS.md, session
+// 51) and product, and an m × m factorisation, whatever r is. False when S + λI or M does not
 // factor (no trial formed).
 bool schur_trial(const Eigen::MatrixXd& Y, int d, double lambda, const std::vector<Entry>& entries,
                        SchurWorkspace& ws) {
   const Eigen::Index n = Y.rows();
-  ws.shifted = ws.S;
-  ws.shifted.diagonal().array() += lambda;
-  if (n <= kGridStepMaxSize) {
-    if (!cholesky_lower(ws.shifted, ws.L)) return false;
+  if (n <= kSweepInverseMaxSize) {
+    if (!inverse_by_sweeps(ws.S, lambda, ws.W)) return false;
   } else {
-    ws.L.swap(ws.shifted);
-    if (!cholesky_in_place(ws.L)) return false;
+    ws.shifted = ws.S;
+    ws.shifted.diagonal().array() += lambda;
+    if (n <= kGridStepMaxSize) {
+      ws.L.resize(n, n);  // (no allocation after the first trial)
+      if (!cholesky_lower(ws.shifted, ws.L)) return false;
+    } else {
+      ws.L.swap(ws.shifted);
+      if (!cholesky_in_place(ws.L)) return false;
+    }
+    invert_lower_factor(ws.L, ws.L_inv);
+    gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᵀ L⁻¹
   }
-  invert_lower_factor(ws.L, ws.L_inv);
-  gram_of_lower_factor(ws.L_inv, ws.W);  // L⁻ᵀ L⁻¹
   schur_complement(ws.X, ws.W, entries, ws.M);
   if (!ws.llt.factor(ws.M)) return false;
   ws.WSY.noalias() = ws.W * ws.SY;

@@ -441,55 +441,68 @@ void invert_complex_lower_padded(const Eigen::Ref<const Eigen::MatrixXcd, 0, Eig
     for (int i = 0; i < n; ++i) inverse(i, j) = {X(i, j), Y(i, j)};
 }
 
-// hermitian_inverse_small on P × P padded copies (n ≤ P): re and im hold A + shift·I and zeros
-// beyond n. Pivot k takes a_ik a_kj / a_kk off every other entry (a_kj = conj(a_jk)), then
-// column k becomes a_ik / a_kk, row k a_kj / a_kk and the pivot −1 / a_kk; after the n sweeps the
-// copies hold −A⁻¹, whose lower triangle is written out, mirrored and negated.
-template <int P>
-bool hermitian_inverse_padded(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W) {
+// inverse_by_sweeps on P × P padded copies (n ≤ P): re (and for a complex A im) hold A + shift·I
+// and zeros beyond n. Pivot k takes a_ik a_kj / a_kk off every other entry (a_kj = conj(a_jk)),
+// then column k becomes a_ik / a_kk, row k a_kj / a_kk and the pivot −1 / a_kk; after the n sweeps
+// the copies hold −A⁻¹, whose lower triangle is written out, negated and mirrored.
+template <int P, class Matrix>
+bool inverse_by_padded_sweeps(const Matrix& A, double shift, Matrix& W) {
+  constexpr bool kComplex = Eigen::NumTraits<typename Matrix::Scalar>::IsComplex;
   const int n = static_cast<int>(A.rows());
-  alignas(64) double re[P * P], im[P * P];
+  alignas(64) double re[P * P];
+  alignas(64) double im[kComplex ? P * P : 1];
   for (int j = 0; j < P; ++j)
     for (int i = 0; i < P; ++i) {
       const bool inside = i < n && j < n;
-      re[j * P + i] = inside ? A(i, j).real() + (i == j ? shift : 0.0) : 0.0;
-      im[j * P + i] = inside ? A(i, j).imag() : 0.0;
+      re[j * P + i] = inside ? std::real(A(i, j)) + (i == j ? shift : 0.0) : 0.0;
+      if constexpr (kComplex) im[j * P + i] = inside ? std::imag(A(i, j)) : 0.0;
     }
-  alignas(64) double column_re[P], column_im[P];  // column k, its pivot entry zeroed
+  alignas(64) double column_re[P];                    // column k, its pivot entry zeroed
+  alignas(64) double column_im[kComplex ? P : 1];
   for (int k = 0; k < n; ++k) {
     const double pivot = re[k * P + k];
     if (!(pivot > 0)) return false;
     const double reciprocal = 1.0 / pivot;
-    for (int i = 0; i < P; ++i) {
-      column_re[i] = re[k * P + i];
-      column_im[i] = im[k * P + i];
+    for (int i = 0; i < P; ++i) column_re[i] = re[k * P + i];
+    column_re[k] = 0.0;
+    if constexpr (kComplex) {
+      for (int i = 0; i < P; ++i) column_im[i] = im[k * P + i];
+      column_im[k] = 0.0;
     }
-    column_re[k] = column_im[k] = 0.0;
     for (int j = 0; j < n; ++j) {
       if (j == k) continue;
-      const double factor_re = column_re[j] * reciprocal, factor_im = -column_im[j] * reciprocal;  // a_kj / a_kk
+      const double factor_re = column_re[j] * reciprocal;  // a_kj / a_kk
       double* __restrict wr = re + j * P;
-      double* __restrict wi = im + j * P;
-      for (int i = 0; i < P; ++i) {
-        wr[i] -= column_re[i] * factor_re - column_im[i] * factor_im;
-        wi[i] -= column_re[i] * factor_im + column_im[i] * factor_re;
+      if constexpr (kComplex) {
+        const double factor_im = -column_im[j] * reciprocal;
+        double* __restrict wi = im + j * P;
+        for (int i = 0; i < P; ++i) {
+          wr[i] -= column_re[i] * factor_re - column_im[i] * factor_im;
+          wi[i] -= column_re[i] * factor_im + column_im[i] * factor_re;
+        }
+        wi[k] = factor_im;
+      } else {
+        for (int i = 0; i < P; ++i) wr[i] -= column_re[i] * factor_re;
       }
       wr[k] = factor_re;
-      wi[k] = factor_im;
     }
-    for (int i = 0; i < P; ++i) {
-      re[k * P + i] = column_re[i] * reciprocal;
-      im[k * P + i] = column_im[i] * reciprocal;
-    }
+    for (int i = 0; i < P; ++i) re[k * P + i] = column_re[i] * reciprocal;
     re[k * P + k] = -reciprocal;
-    im[k * P + k] = 0.0;
+    if constexpr (kComplex) {
+      for (int i = 0; i < P; ++i) im[k * P + i] = column_im[i] * reciprocal;
+      im[k * P + k] = 0.0;
+    }
   }
   W.resize(n, n);
   for (int j = 0; j < n; ++j) {
     W(j, j) = -re[j * P + j];
     for (int i = j + 1; i < n; ++i) {
-      W(i, j) = {-re[j * P + i], -im[j * P + i]};
-      W(j, i) = std::conj(W(i, j));
+      if constexpr (kComplex) {
+        W(i, j) = {-re[j * P + i], -im[j * P + i]};
+        W(j, i) = std::conj(W(i, j));
+      } else {
+        W(i, j) = W(j, i) = -re[j * P + i];
+      }
     }
   }
   return true;
@@ -628,16 +641,29 @@ void gram_of_lower_factor(const Eigen::MatrixXcd& G, Eigen::MatrixXcd& W) {
   for_each_entry_below_diagonal(W.rows(), [&W](Eigen::Index i, Eigen::Index j) { W(j, i) = std::conj(W(i, j)); });
 }
 
-bool hermitian_inverse_small(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W) {
+namespace {
+
+// inverse_by_sweeps at the smallest padded size (4, 8, 12, 16, 24 or 32) that holds A.
+template <class Matrix>
+bool inverse_by_sweeps_impl(const Matrix& A, double shift, Matrix& W) {
   const Eigen::Index n = A.rows();
   eigen_assert(n <= kSweepInverseMaxSize);
   static_assert(kSweepInverseMaxSize <= 32, "a padded copy larger than P = 32");
-  if (n <= 4) return hermitian_inverse_padded<4>(A, shift, W);
-  if (n <= 8) return hermitian_inverse_padded<8>(A, shift, W);
-  if (n <= 12) return hermitian_inverse_padded<12>(A, shift, W);
-  if (n <= 16) return hermitian_inverse_padded<16>(A, shift, W);
-  if (n <= 24) return hermitian_inverse_padded<24>(A, shift, W);
-  return hermitian_inverse_padded<32>(A, shift, W);
+  if (n <= 4) return inverse_by_padded_sweeps<4>(A, shift, W);
+  if (n <= 8) return inverse_by_padded_sweeps<8>(A, shift, W);
+  if (n <= 12) return inverse_by_padded_sweeps<12>(A, shift, W);
+  if (n <= 16) return inverse_by_padded_sweeps<16>(A, shift, W);
+  if (n <= 24) return inverse_by_padded_sweeps<24>(A, shift, W);
+  return inverse_by_padded_sweeps<32>(A, shift, W);
+}
+
+}  // namespace
+
+bool inverse_by_sweeps(const Eigen::MatrixXd& A, double shift, Eigen::MatrixXd& W) {
+  return inverse_by_sweeps_impl(A, shift, W);
+}
+bool inverse_by_sweeps(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W) {
+  return inverse_by_sweeps_impl(A, shift, W);
 }
 
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse) {

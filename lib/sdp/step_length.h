@@ -67,17 +67,20 @@ bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 void invert_lower_factor(const Eigen::MatrixXd& L, Eigen::MatrixXd& inverse);
 void invert_lower_factor(const Eigen::MatrixXcd& L, Eigen::MatrixXcd& inverse);
 
-// Up to this many rows hermitian_inverse_small inverts a Hermitian positive definite matrix.
+// Up to this many rows inverse_by_sweeps inverts a symmetric or Hermitian positive definite matrix.
 constexpr Eigen::Index kSweepInverseMaxSize = 32;
 
-// W = (A + shift·I)⁻¹ for a Hermitian A (n × n, n ≤ kSweepInverseMaxSize), n × n with both
-// triangles (the lower one mirrored, the diagonal real), by Gauss–Jordan sweeps on padded split
-// real and imaginary copies: every pivot's update runs down whole padded columns, n³ complex
-// multiply-adds in all. False when a pivot is not positive (A + shift·I not positive definite:
-// the pivots are those of its L D Lᴴ), W then undefined. Against Cholesky, L⁻¹ and L⁻ᴴ L⁻¹
-// (n³/2 multiply-adds in three passes with short loops): n = 6 / 12 / 24 / 32 took 140 / 410 /
-// 1890 / 3790 ns against 240 / 730 / 3150 / 5880 ns (BENCHMARKS.md, session 51).
-bool hermitian_inverse_small(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W);
+// W = (A + shift·I)⁻¹ for a symmetric or Hermitian A (n × n, n ≤ kSweepInverseMaxSize), n × n with
+// both triangles (the lower one mirrored, the diagonal real), by Gauss–Jordan sweeps on padded
+// copies (complex: split real and imaginary parts): every pivot's update runs down whole padded
+// columns, n³ multiply-adds in all. False when a pivot is not positive (A + shift·I not positive
+// definite: the pivots are those of its L D Lᴴ), W then undefined. Against Cholesky, L⁻¹ and
+// L⁻ᴴ L⁻¹ (n³/2 multiply-adds in three passes with short loops), complex n = 6 / 12 / 24 / 32 took
+// 140 / 410 / 1890 / 3790 ns against 240 / 730 / 3150 / 5880 ns, real n = 6 / 12 / 24 / 32 90 / 300
+// / 1140 / 2280 ns against 240 / 620 / 1790 / 3100 ns (the real chain from a copy of A + shift·I;
+// at n = 48 they were even; BENCHMARKS.md, session 51).
+bool inverse_by_sweeps(const Eigen::MatrixXd& A, double shift, Eigen::MatrixXd& W);
+bool inverse_by_sweeps(const Eigen::MatrixXcd& A, double shift, Eigen::MatrixXcd& W);
 
 // W = Gᴴ G for a lower-triangular G (n × n, zeros above the diagonal, as invert_lower_factor
 // writes), into W (n × n, both triangles): Z⁻¹ = Lz⁻ᴴ Lz⁻¹ from Lz⁻¹. Real: recursive 2 × 2
