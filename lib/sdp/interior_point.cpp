@@ -211,6 +211,16 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
   // paper's cost at N = 5 … 24 0.955–0.99 of the time, iterations identical (BENCHMARKS.md,
   // session 50).
   const bool keep_lx = n > kGridStepMaxSize;
+  // Up to kSweepInverseMaxSize rows W = Z⁻¹ comes from Z itself by inverse_by_sweeps, except for
+  // the `accurate` direction, which reads Lz⁻¹: the dual's next Z is then not factored either
+  // (Z + αΔZ ≻ 0 follows from the test at α/τ, as for X), and Lz is formed only when an
+  // `accurate` iteration needs it (below the hand-off gap: in automatic mode only when the
+  // interior point resumes). Sweep (4 seeds, N = 5 … 24, six real kinds, noise 0.002 … 0.1): random
+  // full rank 0.94–0.96 of the time at N = 7 … 16 (N = 20 / 24, n > 32, unchanged), 0.98 in all,
+  // one iteration more over 540 instances, no status or objective changed; in-process N = 8 / 12
+  // 79.6 / 170 → 76.7 / 163 µs (BENCHMARKS.md, session 51).
+  const bool sweep_inverse = n <= kSweepInverseMaxSize;
+  bool z_factored = false;  // ws.Lz holds Z's factor
   bool factored = false;
   double last_ap = 0, last_ad = 0;  // the last corrector's step lengths (kAffineStepFraction)
   for (int it = done; it < options.max_ipm_iterations; ++it) {
@@ -227,13 +237,21 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     if (rule.stops(verdict, "interior point", it + 1, out)) break;
     const double mu = gap / n;
     const bool accurate = rel_gap < kAccurateDirectionGap;
-    if (!factored && !(factor_lower(Z, ws.Lz) && factor_lower(X, ws.Lx))) {
+    const bool by_sweeps = sweep_inverse && !accurate;  // W from Z, Lz not needed
+    if (!factored && !factor_lower(X, ws.Lx)) {
       out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
       break;
     }
     factored = true;
-    invert_lower_factor(ws.Lz, ws.Lz_inv);
-    gram_of_lower_factor(ws.Lz_inv, ws.W);               // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
+    if (by_sweeps ? !inverse_by_sweeps(Z, 0.0, ws.W) : !z_factored && !factor_lower(Z, ws.Lz)) {
+      out.reason = "interior point lost positive definiteness at iteration " + std::to_string(it);
+      break;
+    }
+    if (!by_sweeps) {
+      z_factored = true;
+      invert_lower_factor(ws.Lz, ws.Lz_inv);
+      gram_of_lower_factor(ws.Lz_inv, ws.W);             // Z⁻¹ = Lz⁻ᵀ Lz⁻¹
+    }
     if (invert_x) invert_lower_factor(ws.Lx, ws.Lx_inv);
     schur_complement(X, ws.W, entries, ws.M);
     if (!ws.chol_m.factor(ws.M)) {
@@ -270,7 +288,7 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     ws.P += ws.dx;
     primal_direction(X, sigma * mu, accurate, ws, ws.dx);
     const double ap = ws.primal_steps.full(X, ws.Lx, ws.Lx_inv, ws.dx, tau, keep_lx);
-    const double ad = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz, d, tau);
+    const double ad = ws.dual_steps.block_diagonal(Z, ws.Lz, ws.Lz_inv, ws.dz, d, tau, !sweep_inverse);
     last_ap = ap;
     last_ad = ad;
     if (ap == 0.0 && ad == 0.0) {
@@ -282,7 +300,12 @@ InteriorPointOutcome solve_interior_point(const Eigen::MatrixXd& C, int d, const
     if (ap > 0) keep_lx ? ws.primal_steps.take_tested(X, ws.Lx) : ws.primal_steps.take_trial(X);
     if (ad > 0) {
       y += ad * ws.dy;
-      ws.dual_steps.take_tested(Z, ws.Lz);
+      if (sweep_inverse) {
+        ws.dual_steps.take_trial(Z);
+        z_factored = false;
+      } else {
+        ws.dual_steps.take_tested(Z, ws.Lz);
+      }
     }
   }
   X = best_X;

@@ -753,7 +753,7 @@ double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, cons
 }
 
 double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
-                                  const Eigen::MatrixXd& D, int d, double tau) {
+                                  const Eigen::MatrixXd& D, int d, double tau, bool factor_next) {
   const Eigen::Index n = P.rows();
   if (!D.allFinite()) return 0.0;
   const auto form_trial = [&](double a) {  // trial_ = P + a Δ, Δ added blockwise
@@ -765,7 +765,7 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
       w.resize(n);  // Δ u block by block
       for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
     });
-  });
+  }, factor_next);
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {

@@ -145,9 +145,10 @@ class StepLength {
   double full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
               const Eigen::MatrixXd& delta, double tau, bool factor_next = true);
 
-  // The same for a block-diagonal Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d).
+  // The same for a block-diagonal Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d),
+  // factor_next as full's.
   double block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, const Eigen::MatrixXd& inverse,
-                        const Eigen::MatrixXd& D, int d, double tau);
+                        const Eigen::MatrixXd& D, int d, double tau, bool factor_next = true);
 
   // After a call with τ < 1 that returned α > 0: swaps P + αΔ, the matrix its Cholesky test passed,
   // into `next` and that test's factor into the lower triangle of `next_factor` (both n × n). The
