@@ -274,17 +274,14 @@ inline double generic_start_entry(Eigen::Index i, int j) {
   return 1.0 + 0.5 * (turn - std::floor(turn));
 }
 
-// The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
-// n × k, by subspace inverse iteration on M + δI (δ: inverse_iteration_shift): one Cholesky factorisation, then O(n²) per step,
-// with two guard vectors that speed up convergence of the first k. For n ≤ full_up_to, or when
-// M + δI is not positive definite (M indefinite), lowest_eigenpairs (O(n³) once) is used instead.
-// The real staircase and the complex one start from it.
 // W = (M + δI)⁻¹ (n × n) for the self-adjoint M (real or complex), δ = inverse_iteration_shift(M),
-// by the Schur-form Newton's kernels: Cholesky, L⁻¹, L⁻ᴴ L⁻¹. False when M + δI fails its Cholesky
-// test (W then untouched). The spectral starts' power and subspace iterations multiply by it
+// by the Schur-form Newton's kernels: inverse_by_sweeps up to kSweepInverseMaxSize rows, above it
+// Cholesky, L⁻¹, L⁻ᴴ L⁻¹. False when M + δI is not positive definite (a pivot not positive; W then
+// undefined). The spectral starts' power and subspace iterations multiply by it
 // (bottom_vector_by_inverse, bottom_vectors_by_inverse).
 template <class Matrix>
 bool shifted_inverse(const Matrix& M, Matrix& W) {
+  if (M.rows() <= kSweepInverseMaxSize) return inverse_by_sweeps(M, inverse_iteration_shift(M), W);
   Matrix L = M;  // M + δI, then its Cholesky factor (lower triangle), n × n
   L.diagonal().array() += inverse_iteration_shift(M);
   if (!cholesky_in_place(L)) return false;
@@ -313,6 +310,12 @@ Matrix bottom_ritz_vectors(const Matrix& M, const Matrix& V, int k) {
   return V * small.eigenvectors().leftCols(k);
 }
 
+// The k eigenvectors of the smallest eigenvalues of the self-adjoint M (n × n, real or complex),
+// n × k, by subspace inverse iteration on M + δI (δ: inverse_iteration_shift): one Cholesky
+// factorisation, then O(n²) per step, with two guard vectors that speed up convergence of the
+// first k. For n ≤ full_up_to, or when M + δI is not positive definite (M indefinite),
+// lowest_eigenpairs (O(n³) once) is used instead. The real staircase and the complex one start
+// from it.
 template <class Matrix>
 Matrix bottom_eigenvectors(const Matrix& M, int k, Eigen::Index full_up_to) {
   const Eigen::Index n = M.rows();
