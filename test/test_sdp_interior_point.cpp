@@ -1119,6 +1119,30 @@ TEST(SdpKernels, PositiveDefiniteWhenShiftedDecidesAtTheLowestEigenvalue) {
   EXPECT_FALSE(fact::sdp::detail::positive_definite_when_shifted(H, -lowest * 0.999));
 }
 
+// passes_cholesky_test decides as a Cholesky factorisation does, on both sides of the boundary:
+// B + sI with s just above and just below −λ_min(B) (B symmetric indefinite), for n = 1 … 56
+// (below the padded kernel, each of its padded sizes, and above the grid's sizes); the upper
+// triangle is not read; a NaN entry fails.
+TEST(SdpKernels, PassesCholeskyTestDecidesAtTheLowestEigenvalue) {
+  std::mt19937 rng(37);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (Eigen::Index n = 1; n <= 56; ++n) {
+    SCOPED_TRACE(testing::Message() << "n = " << n);
+    const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd B = G + G.transpose();
+    const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(B, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    const double margin = 1e-3 * std::max(1.0, std::abs(lowest));
+    Eigen::MatrixXd above = B + (-lowest + margin) * Eigen::MatrixXd::Identity(n, n);
+    const Eigen::MatrixXd below = B + (-lowest - margin) * Eigen::MatrixXd::Identity(n, n);
+    above.triangularView<Eigen::StrictlyUpper>().setConstant(-1e3);  // not read
+    EXPECT_TRUE(fact::sdp::detail::passes_cholesky_test(above));
+    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(below));
+    Eigen::MatrixXd broken = above;
+    broken(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(broken));
+  }
+}
+
 TEST(SdpKernels, CholeskyInPlaceFactorsOnEveryPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(23);
   expect_cholesky_on_every_path<Eigen::MatrixXd>(rng);

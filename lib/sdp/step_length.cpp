@@ -732,7 +732,7 @@ double StepLength::on_grid(double tau, FormTrial form_trial, bool factor_next) {
     form_trial(alpha / tau);
     // (the corrector keeps P + αΔ itself formed, and with factor_next tested and factored, for
     // take_tested)
-    if (positive_definite() && (predictor || (form_trial(alpha), !factor_next || positive_definite()))) return alpha;
+    if (passes_test() && (predictor || (form_trial(alpha), !factor_next || positive_definite()))) return alpha;
     const bool fine = !predictor && alpha > kFineGridFloor;
     alpha *= fine ? kCorrectorStepRatio : kPredictorStepRatio;
     if (!fine) ++coarse_tries;
@@ -768,6 +768,58 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
   }, factor_next);
 }
 
+namespace {
+
+// A's Cholesky test without its factor, left-looking on a P × P padded copy (n ≤ P, P a multiple
+// of 8, leading dimension P): column j is A's from its 8-row block on (zeros above row j and from
+// row n), less its multiples of the finished columns, four at a time, each update over whole
+// 8-row blocks to row P. Columns are copied only as they are reached, so a test that fails at
+// pivot k has read k columns. Against cholesky_lower (n = 24 / 36 / 48, positive definite: 590 /
+// 1260 / 2040 ns; failing at the last pivot 592 / 1250 / 2140; at the middle one 300 / 560 / 870):
+// 557 / 971 / 1525, 550 / 960 / 1521 and 209 / 394 / 567 ns (BENCHMARKS.md, session 51).
+template <int P>
+bool passes_padded_cholesky(const Eigen::MatrixXd& A) {
+  alignas(64) double l[P * P];
+  const int n = static_cast<int>(A.rows());
+  for (int j = 0; j < n; ++j) {
+    double* __restrict c = l + j * P;
+    const int from = j & ~7;
+    const double* a = &A(0, j);
+    for (int i = from; i < P; ++i) c[i] = i >= j && i < n ? a[i] : 0.0;
+    int k = 0;
+    for (; k + 3 < j; k += 4) {
+      const double *l0 = l + k * P, *l1 = l0 + P, *l2 = l1 + P, *l3 = l2 + P;
+      const double x0 = l0[j], x1 = l1[j], x2 = l2[j], x3 = l3[j];
+      for (int i = from; i < P; ++i) c[i] -= l0[i] * x0 + l1[i] * x1 + l2[i] * x2 + l3[i] * x3;
+    }
+    for (; k < j; ++k) {
+      const double* l0 = l + k * P;
+      const double x0 = l0[j];
+      for (int i = from; i < P; ++i) c[i] -= l0[i] * x0;
+    }
+    const double pivot = c[j];
+    if (!(pivot > 0)) return false;
+    const double root = std::sqrt(pivot), scale = 1.0 / root;
+    for (int i = from; i < P; ++i) c[i] = i > j ? c[i] * scale : (i == j ? root : 0.0);
+  }
+  return true;
+}
+
+}  // namespace
+
+bool passes_cholesky_test(const Eigen::MatrixXd& A) {
+  const Eigen::Index n = A.rows();
+  if (n < kPaddedTestMinSize || n > kGridStepMaxSize) {
+    Eigen::MatrixXd L(n, n);  // (not on the interior point's path: StepLength keeps its own)
+    return factor_lower(A, L);
+  }
+  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
+  if (n <= 24) return passes_padded_cholesky<24>(A);
+  if (n <= 32) return passes_padded_cholesky<32>(A);
+  if (n <= 40) return passes_padded_cholesky<40>(A);
+  return passes_padded_cholesky<48>(A);
+}
+
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
   if (A.rows() <= kGridStepMaxSize) return cholesky_lower(A, L);
   L = A;
@@ -775,6 +827,11 @@ bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 }
 
 bool StepLength::positive_definite() { return factor_lower(trial_, trial_factor_); }
+
+bool StepLength::passes_test() {
+  const Eigen::Index n = trial_.rows();
+  return n >= kPaddedTestMinSize && n <= kGridStepMaxSize ? passes_cholesky_test(trial_) : positive_definite();
+}
 
 void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor) {
   next.swap(trial_);

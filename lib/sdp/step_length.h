@@ -54,6 +54,17 @@ constexpr int kInverseLanczosMaxSize = 96;
 constexpr Eigen::Index kColumnCholeskyMinSize = 24;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
+// From this size up to kGridStepMaxSize rows passes_cholesky_test runs a padded left-looking test;
+// below it cholesky_lower's right-looking loops were faster on matrices that pass or fail late
+// (n = 16: 291 against 355 ns; at n = 20 403 against 440; BENCHMARKS.md, session 51).
+constexpr Eigen::Index kPaddedTestMinSize = 20;
+
+// Whether the symmetric A (n × n, lower triangle read) passes a Cholesky test (is positive
+// definite), without keeping the factor: the grid's first test of each step length, whose
+// factor is never used. From kPaddedTestMinSize to kGridStepMaxSize rows by a padded left-looking
+// kernel on the stack, otherwise factor_lower into a scratch matrix.
+bool passes_cholesky_test(const Eigen::MatrixXd& A);
+
 // The same by the kernel for A's size: cholesky_lower up to kGridStepMaxSize rows, Eigen's
 // (cholesky_in_place on a copy into L) above. The interior points' and dual scaling's factors
 // of X, Z and their step tests.
@@ -168,7 +179,8 @@ class StepLength {
   // The grid's step (kGridStepMaxSize); factor_next as full's.
   template <class FormTrial>
   double on_grid(double tau, FormTrial form_trial, bool factor_next);
-  bool positive_definite();  // Cholesky test of trial_
+  bool positive_definite();  // Cholesky test of trial_, its factor into trial_factor_
+  bool passes_test();        // the same without the factor (passes_cholesky_test where it is faster)
 
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
   Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
