@@ -1002,7 +1002,8 @@ TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
 }
 
 // SpdSolver on each of its paths (L D Lᵀ to 12 rows, padded to 4, 8 or 12; cholesky_lower to 64
-// rows, right-looking below 24 and by columns from 24; Eigen's blocked kernel in place above; and
+// rows, right-looking below 24, by columns from 24, on a padded copy from 28 to 48 (each padded
+// size) and by columns again above; Eigen's blocked kernel in place above; and
 // back, so that a smaller L D Lᵀ system follows a larger one in the same padding and in another):
 // x = A⁻¹ b for A = B Bᵀ + n I, with x aliasing b, and the same x with A's strict upper triangle
 // NaN (only the lower one is read); false and a NaN solution for an indefinite A, one whose every
@@ -1011,7 +1012,7 @@ TEST(SdpKernels, SpdSolverSolvesOnEachPathAndRefusesIndefiniteMatrices) {
   std::mt19937 rng(17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   fact::sdp::detail::SpdSolver solver(3);
-  for (int n : {1, 2, 4, 5, 8, 9, 12, 13, 23, 24, 64, 65, 100, 7, 3, 11, 10, 8, 6}) {
+  for (int n : {1, 2, 4, 5, 8, 9, 12, 13, 23, 24, 28, 32, 36, 40, 47, 48, 49, 64, 65, 100, 7, 3, 11, 10, 8, 6}) {
     SCOPED_TRACE("n = " + std::to_string(n));
     const Eigen::MatrixXd B = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd A = B * B.transpose() + n * Eigen::MatrixXd::Identity(n, n);

@@ -216,8 +216,13 @@ bool cholesky_lower_by_columns(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 
 }  // namespace
 
+namespace {
+bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L);  // (below)
+}  // namespace
+
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
   const Eigen::Index n = A.rows();
+  if (n >= kPaddedFactorMinSize && n <= 48) return padded_left_cholesky(A, &L);
   if (n >= kColumnCholeskyMinSize) return cholesky_lower_by_columns(A, L);
   for (Eigen::Index j = 0; j < n; ++j)  // the lower triangle of A, column by column
     std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
@@ -770,15 +775,16 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
 
 namespace {
 
-// A's Cholesky test without its factor, left-looking on a P × P padded copy (n ≤ P, P a multiple
-// of 8, leading dimension P): column j is A's from its 8-row block on (zeros above row j and from
-// row n), less its multiples of the finished columns, four at a time, each update over whole
-// 8-row blocks to row P. Columns are copied only as they are reached, so a test that fails at
-// pivot k has read k columns. Against cholesky_lower (n = 24 / 36 / 48, positive definite: 590 /
-// 1260 / 2040 ns; failing at the last pivot 592 / 1250 / 2140; at the middle one 300 / 560 / 870):
-// 557 / 971 / 1525, 550 / 960 / 1521 and 209 / 394 / 567 ns (BENCHMARKS.md, session 51).
+// A's Cholesky factorisation, left-looking on a P × P padded copy (n ≤ P, P a multiple of 8,
+// leading dimension P): column j is A's from its 8-row block on (zeros above row j and from row
+// n), less its multiples of the finished columns, four at a time, each update over whole 8-row
+// blocks to row P. Columns are copied only as they are reached, so a test that fails at pivot k
+// has read k columns. The factor goes to the lower triangle of *L when L is given (on success).
+// Against cholesky_lower's loops (n = 24 / 36 / 48, positive definite: 590 / 1260 / 2040 ns;
+// failing at the last pivot 592 / 1250 / 2140; at the middle one 300 / 560 / 870): 557 / 971 /
+// 1525, 550 / 960 / 1521 and 209 / 394 / 567 ns without the factor (BENCHMARKS.md, session 51).
 template <int P>
-bool passes_padded_cholesky(const Eigen::MatrixXd& A) {
+bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
   alignas(64) double l[P * P];
   const int n = static_cast<int>(A.rows());
   for (int j = 0; j < n; ++j) {
@@ -802,7 +808,20 @@ bool passes_padded_cholesky(const Eigen::MatrixXd& A) {
     const double root = std::sqrt(pivot), scale = 1.0 / root;
     for (int i = from; i < P; ++i) c[i] = i > j ? c[i] * scale : (i == j ? root : 0.0);
   }
+  if (L)
+    for (int j = 0; j < n; ++j) std::copy(l + j * P + j, l + j * P + n, &(*L)(j, j));
   return true;
+}
+
+// padded_left_cholesky at the smallest padded size (24, 32, 40 or 48) that holds A.
+bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
+  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
+  const Eigen::Index n = A.rows();
+  eigen_assert(n <= 48);
+  if (n <= 24) return padded_left_cholesky<24>(A, L);
+  if (n <= 32) return padded_left_cholesky<32>(A, L);
+  if (n <= 40) return padded_left_cholesky<40>(A, L);
+  return padded_left_cholesky<48>(A, L);
 }
 
 }  // namespace
@@ -813,11 +832,7 @@ bool passes_cholesky_test(const Eigen::MatrixXd& A) {
     Eigen::MatrixXd L(n, n);  // (not on the interior point's path: StepLength keeps its own)
     return factor_lower(A, L);
   }
-  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
-  if (n <= 24) return passes_padded_cholesky<24>(A);
-  if (n <= 32) return passes_padded_cholesky<32>(A);
-  if (n <= 40) return passes_padded_cholesky<40>(A);
-  return passes_padded_cholesky<48>(A);
+  return padded_left_cholesky(A, nullptr);
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {

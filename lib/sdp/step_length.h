@@ -52,6 +52,10 @@ constexpr int kInverseLanczosMaxSize = 96;
 // (n = 24 / 32 / 48 / 64: 0.72 / 1.24 / 3.2 / 6.5 µs right-looking, 0.63 / 1.03 / 2.3 / 4.2 µs
 // left-looking; n = 16: 0.33 against 0.35; BENCHMARKS.md, session 27).
 constexpr Eigen::Index kColumnCholeskyMinSize = 24;
+// From this size to 48 rows cholesky_lower runs passes_cholesky_test's padded left-looking kernel
+// and copies the factor out: n = 28 / 36 / 48 took 809 / 1260 / 2210 ns by matrix–vector products,
+// 724 / 1030 / 1660 ns this way (at n = 24 617 against 587; BENCHMARKS.md, session 51).
+constexpr Eigen::Index kPaddedFactorMinSize = 28;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // From this size up to kGridStepMaxSize rows passes_cholesky_test runs a padded left-looking test;
