@@ -1250,8 +1250,8 @@ void expect_triangular_products_match(std::mt19937& rng) {
 // inverse_by_sweeps's W = (A + sI)⁻¹ against Eigen's LLT inverse, real and complex, for n = 1 … 32
 // (every padded size, full and partly filled) and a shift that moves A's diagonal: W symmetric
 // or Hermitian exactly (its upper triangle the lower one's conjugate), into an output of the wrong
-// size with stale entries; false for an indefinite A + sI (λ_min = −0.1 after the shift) and for a
-// NaN entry.
+// size with stale entries; false for an indefinite A + sI (λ_min = −0.1 after the shift), for a
+// NaN entry and for an infinite diagonal entry (whose pivot would give a finite-looking W).
 template <class Matrix>
 void check_inverse_by_sweeps(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -1277,6 +1277,9 @@ void check_inverse_by_sweeps(std::mt19937& rng) {
     if (n > 1) {
       EXPECT_FALSE(fact::sdp::detail::inverse_by_sweeps(broken, shift, W));
     }
+    Matrix infinite = A;
+    infinite(n - 1, n - 1) = std::numeric_limits<double>::infinity();
+    EXPECT_FALSE(fact::sdp::detail::inverse_by_sweeps(infinite, shift, W));
   }
 }
 

@@ -466,7 +466,8 @@ bool inverse_by_padded_sweeps(const Matrix& A, double shift, Matrix& W) {
   alignas(64) double column_im[kComplex ? P : 1];
   for (int k = 0; k < n; ++k) {
     const double pivot = re[k * P + k];
-    if (!(pivot > 0)) return false;
+    // (an infinite pivot would leave a zero reciprocal and a finite-looking W, as for SpdSolver)
+    if (!(pivot > 0 && pivot <= std::numeric_limits<double>::max())) return false;
     const double reciprocal = 1.0 / pivot;
     for (int i = 0; i < P; ++i) column_re[i] = re[k * P + i];
     column_re[k] = 0.0;

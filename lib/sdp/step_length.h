@@ -89,7 +89,7 @@ constexpr Eigen::Index kSweepInverseMaxSize = 32;
 // both triangles (the lower one mirrored, the diagonal real), by Gauss–Jordan sweeps on padded
 // copies (complex: split real and imaginary parts): every pivot's update runs down whole padded
 // columns, n³ multiply-adds in all. False when a pivot is not positive (A + shift·I not positive
-// definite: the pivots are those of its L D Lᴴ), W then undefined. Against Cholesky, L⁻¹ and
+// definite: the pivots are those of its L D Lᴴ) or not finite, W then undefined. Against Cholesky, L⁻¹ and
 // L⁻ᴴ L⁻¹ (n³/2 multiply-adds in three passes with short loops), complex n = 6 / 12 / 24 / 32 took
 // 140 / 410 / 1890 / 3790 ns against 240 / 730 / 3150 / 5880 ns, real n = 6 / 12 / 24 / 32 90 / 300
 // / 1140 / 2280 ns against 240 / 620 / 1790 / 3100 ns (the real chain from a copy of A + shift·I;
