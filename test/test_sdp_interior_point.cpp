@@ -1136,11 +1136,12 @@ TEST(SdpKernels, PassesCholeskyTestDecidesAtTheLowestEigenvalue) {
     Eigen::MatrixXd above = B + (-lowest + margin) * Eigen::MatrixXd::Identity(n, n);
     const Eigen::MatrixXd below = B + (-lowest - margin) * Eigen::MatrixXd::Identity(n, n);
     above.triangularView<Eigen::StrictlyUpper>().setConstant(-1e3);  // not read
-    EXPECT_TRUE(fact::sdp::detail::passes_cholesky_test(above));
-    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(below));
+    Eigen::MatrixXd scratch;  // (sized by the test where it uses it)
+    EXPECT_TRUE(fact::sdp::detail::passes_cholesky_test(above, scratch));
+    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(below, scratch));
     Eigen::MatrixXd broken = above;
     broken(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(broken));
+    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(broken, scratch));
   }
 }
 

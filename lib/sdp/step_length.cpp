@@ -827,11 +827,11 @@ bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
 
 }  // namespace
 
-bool passes_cholesky_test(const Eigen::MatrixXd& A) {
+bool passes_cholesky_test(const Eigen::MatrixXd& A, Eigen::MatrixXd& scratch) {
   const Eigen::Index n = A.rows();
   if (n < kPaddedTestMinSize || n > kGridStepMaxSize) {
-    Eigen::MatrixXd L(n, n);  // (not on the interior point's path: StepLength keeps its own)
-    return factor_lower(A, L);
+    scratch.resize(n, n);  // (cholesky_lower writes into an n × n L; a no-op when it already is)
+    return factor_lower(A, scratch);
   }
   return padded_left_cholesky(A, nullptr);
 }
@@ -844,10 +844,7 @@ bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 
 bool StepLength::positive_definite() { return factor_lower(trial_, trial_factor_); }
 
-bool StepLength::passes_test() {
-  const Eigen::Index n = trial_.rows();
-  return n >= kPaddedTestMinSize && n <= kGridStepMaxSize ? passes_cholesky_test(trial_) : positive_definite();
-}
+bool StepLength::passes_test() { return passes_cholesky_test(trial_, trial_factor_); }
 
 void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor) {
   next.swap(trial_);

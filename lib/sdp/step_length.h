@@ -66,8 +66,8 @@ constexpr Eigen::Index kPaddedTestMinSize = 20;
 // Whether the symmetric A (n × n, lower triangle read) passes a Cholesky test (is positive
 // definite), without keeping the factor: the grid's first test of each step length, whose
 // factor is never used. From kPaddedTestMinSize to kGridStepMaxSize rows by a padded left-looking
-// kernel on the stack, otherwise factor_lower into a scratch matrix.
-bool passes_cholesky_test(const Eigen::MatrixXd& A);
+// kernel on the stack, otherwise factor_lower into scratch (then holding the factor, or stale).
+bool passes_cholesky_test(const Eigen::MatrixXd& A, Eigen::MatrixXd& scratch);
 
 // The same by the kernel for A's size: cholesky_lower up to kGridStepMaxSize rows, Eigen's
 // (cholesky_in_place on a copy into L) above. The interior points' and dual scaling's factors
@@ -184,7 +184,7 @@ class StepLength {
   template <class FormTrial>
   double on_grid(double tau, FormTrial form_trial, bool factor_next);
   bool positive_definite();  // Cholesky test of trial_, its factor into trial_factor_
-  bool passes_test();        // the same without the factor (passes_cholesky_test where it is faster)
+  bool passes_test();        // the same by passes_cholesky_test (trial_factor_ its scratch)
 
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
   Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
