@@ -441,8 +441,8 @@ TEST(SdpComplexInteriorPoint, PolishWithTheShiftCappedByTheGradientTakesFewerSte
 // solve() passes the cap to the polish after complex dual scaling (N ≥ 27): over eight instances
 // whose polish the cap shortened when written (N = 28 seeds 1, 2, 4, 7; N = 32 seeds 2, 4, 5, 7),
 // automatic mode's first complex_newton stages (the hand-off's polish; a second one starts from
-// a wider factor after a saddle, N = 32 seed 2 since session 48) took 26 steps in all, against 35
-// without the cap; the bound sits between the two.
+// a wider factor after a saddle, N = 32 seed 2 in sessions 48 … 51) took 26 steps in all, against
+// 35 without the cap; the bound sits between the two.
 TEST(SdpComplexInteriorPoint, AutomaticModeCapsThePolishShift) {
   int steps = 0;
   for (const auto& [drones, seed] : {std::pair{28, 1u}, std::pair{28, 2u}, std::pair{28, 4u}, std::pair{28, 7u},
@@ -476,13 +476,14 @@ TEST(SdpComplexNewton, SkipsAFirstShiftThatFailedLastStepOnlyFarFromTheOptimum) 
   EXPECT_EQ(skipped_shift(1e-5, 0.0, 1e-3, 0.0), 0.0);     // no failure last step
 }
 
-// N = 32 seed 2 (as above): the hand-off's factor (X down to 1e-2) has rank 2 and its Newton ends
-// at a saddle, λ_min(S) < 0, in 5 steps (this instance's path at session 48's rounding: a kernel
-// that rounds differently can move the cut and the stages). Newton from X's factor down to 1e-3 (rank 3) certifies,
-// where the interior point used to resume for 24 more iterations; the optimum is the one the
-// interior point alone reaches.
+// N = 28 seed 8: the Newton polish from the hand-off's factor (X down to 1e-2) ends at a saddle,
+// λ_min(S) < 0, after 4 steps, before its kComplexHandoffSteps. Newton from X's factor down to 1e-3
+// certifies an optimum of rank 4, where the interior point used to resume; the optimum is the one
+// the interior point alone reaches. Which instances end at such a saddle depends on the kernels'
+// rounding: until session 52 this was N = 32 seed 2, whose first polish certifies since the
+// padded factor became LDLᵀ; N = 28 seed 8 reached the saddle with both factors.
 TEST(SdpComplexInteriorPoint, HandoffPolishAtASaddleStartsAgainFromAWiderFactor) {
-  const Eigen::MatrixXd C = fact::sdp::complex_form(fact::test::noisy_plain_cost(32, 2));
+  const Eigen::MatrixXd C = fact::sdp::complex_form(fact::test::noisy_plain_cost(28, 8));
   const fact::sdp::Result r = fact::sdp::solve(C, 2);
   ASSERT_TRUE(r.certified()) << r.reason;
   std::vector<std::string> methods;
@@ -1120,28 +1121,60 @@ TEST(SdpKernels, PositiveDefiniteWhenShiftedDecidesAtTheLowestEigenvalue) {
   EXPECT_FALSE(fact::sdp::detail::positive_definite_when_shifted(H, -lowest * 0.999));
 }
 
-// passes_cholesky_test decides as a Cholesky factorisation does, on both sides of the boundary:
-// B + sI with s just above and just below −λ_min(B) (B symmetric indefinite), for n = 1 … 56
-// (below the padded kernel, each of its padded sizes, and above the grid's sizes); the upper
-// triangle is not read; a NaN entry fails.
-TEST(SdpKernels, PassesCholeskyTestDecidesAtTheLowestEigenvalue) {
+// The grid's tests of P + aΔ (sum_passes_cholesky_test, and block_sum_passes_cholesky_test for
+// Δ = blkdiag(D), d = 1 and 2) decide as a Cholesky factorisation does, on both sides of the
+// boundary: P + aΔ = B + sI with s just above and just below −λ_min(B) (B symmetric indefinite),
+// for n = 1 … 48 (every padded size of the right-looking and the left-looking kernel); the upper
+// triangles of P, Δ and D's blocks are not read; a NaN entry or an infinite pivot fails.
+TEST(SdpKernels, SumPassesCholeskyTestDecidesAtTheLowestEigenvalue) {
+  using fact::sdp::detail::block_sum_passes_cholesky_test;
+  using fact::sdp::detail::sum_passes_cholesky_test;
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  for (Eigen::Index n = 1; n <= 56; ++n) {
+  const double a = 0.7, garbage = -1e3;
+  for (Eigen::Index n = 1; n <= fact::sdp::detail::kGridStepMaxSize; ++n) {
     SCOPED_TRACE(testing::Message() << "n = " << n);
     const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
+    const Eigen::MatrixXd H = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);
     const Eigen::MatrixXd B = G + G.transpose();
+    Eigen::MatrixXd delta = H + H.transpose();
     const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(B, Eigen::EigenvaluesOnly).eigenvalues()[0];
     const double margin = 1e-3 * std::max(1.0, std::abs(lowest));
-    Eigen::MatrixXd above = B + (-lowest + margin) * Eigen::MatrixXd::Identity(n, n);
-    const Eigen::MatrixXd below = B + (-lowest - margin) * Eigen::MatrixXd::Identity(n, n);
-    above.triangularView<Eigen::StrictlyUpper>().setConstant(-1e3);  // not read
-    Eigen::MatrixXd scratch;  // (sized by the test where it uses it)
-    EXPECT_TRUE(fact::sdp::detail::passes_cholesky_test(above, scratch));
-    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(below, scratch));
-    Eigen::MatrixXd broken = above;
-    broken(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_FALSE(fact::sdp::detail::passes_cholesky_test(broken, scratch));
+    for (const bool above : {true, false}) {
+      SCOPED_TRACE(above ? "above the boundary" : "below the boundary");
+      const double shift = -lowest + (above ? margin : -margin);
+      const Eigen::MatrixXd target = B + shift * Eigen::MatrixXd::Identity(n, n);  // P + aΔ
+      Eigen::MatrixXd P = target - a * delta;
+      Eigen::MatrixXd full_delta = delta;
+      P.triangularView<Eigen::StrictlyUpper>().setConstant(garbage);
+      full_delta.triangularView<Eigen::StrictlyUpper>().setConstant(garbage);
+      EXPECT_EQ(sum_passes_cholesky_test(P, a, full_delta), above);
+      for (const int d : {1, 2}) {
+        if (n % d != 0) continue;
+        SCOPED_TRACE(testing::Message() << "d = " << d);
+        Eigen::MatrixXd D = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, d, rng, gauss);  // blocks stacked
+        Eigen::MatrixXd blocks = Eigen::MatrixXd::Zero(n, n);                               // blkdiag(D)
+        for (Eigen::Index i = 0; i < n; i += d) {
+          if (d == 2) D(i, 1) = D(i + 1, 0);
+          blocks.block(i, i, d, d) = D.middleRows(i, d);
+        }
+        Eigen::MatrixXd Pb = target - a * blocks;
+        Pb.triangularView<Eigen::StrictlyUpper>().setConstant(garbage);
+        if (d == 2)
+          for (Eigen::Index i = 0; i < n; i += 2) D(i, 1) = garbage;  // each block's upper entry
+        EXPECT_EQ(block_sum_passes_cholesky_test(Pb, a, D, d), above);
+        if (!above) continue;
+        Pb(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
+        EXPECT_FALSE(block_sum_passes_cholesky_test(Pb, a, D, d));
+      }
+      if (!above) continue;
+      Eigen::MatrixXd broken = P;
+      broken(n - 1, 0) = std::numeric_limits<double>::quiet_NaN();
+      EXPECT_FALSE(sum_passes_cholesky_test(broken, a, full_delta));
+      broken = P;
+      broken(0, 0) = std::numeric_limits<double>::infinity();
+      EXPECT_FALSE(sum_passes_cholesky_test(broken, a, full_delta));
+    }
   }
 }
 

@@ -717,10 +717,10 @@ StepLength::StepLength(int n) : trial_(n, n), trial_factor_(n, n) {}
 constexpr double kFineGridFloor = 0.5;
 constexpr int kCoarseGridTries = 30;
 
-template <class FormTrial, class LowestEstimate>
-double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate,
-                        bool factor_next) {
-  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial, factor_next);
+template <class FormTrial, class PassesAt, class LowestEstimate>
+double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, PassesAt passes_at,
+                        LowestEstimate lowest_estimate, bool factor_next) {
+  if (n <= kGridStepMaxSize) return on_grid(tau, form_trial, passes_at, factor_next);
   const double lmin = lowest_estimate();
   const double alpha = lmin < 0 ? std::min(1.0, -tau / lmin) : 1.0;
   if (tau >= 1.0) return alpha;
@@ -730,15 +730,14 @@ double StepLength::step(Eigen::Index n, double tau, FormTrial form_trial, Lowest
   });
 }
 
-template <class FormTrial>
-double StepLength::on_grid(double tau, FormTrial form_trial, bool factor_next) {
+template <class FormTrial, class PassesAt>
+double StepLength::on_grid(double tau, FormTrial form_trial, PassesAt passes_at, bool factor_next) {
   const bool predictor = tau >= 1.0;
   int coarse_tries = 0;
   for (double alpha = 1.0; coarse_tries < kCoarseGridTries;) {
-    form_trial(alpha / tau);
     // (the corrector keeps P + αΔ itself formed, and with factor_next tested and factored, for
     // take_tested)
-    if (passes_test() && (predictor || (form_trial(alpha), !factor_next || positive_definite()))) return alpha;
+    if (passes_at(alpha / tau) && (predictor || (form_trial(alpha), !factor_next || positive_definite()))) return alpha;
     const bool fine = !predictor && alpha > kFineGridFloor;
     alpha *= fine ? kCorrectorStepRatio : kPredictorStepRatio;
     if (!fine) ++coarse_tries;
@@ -751,6 +750,7 @@ double StepLength::full(const Eigen::MatrixXd& P, const Eigen::MatrixXd& L, cons
   if (!delta.allFinite()) return 0.0;
   return step(
       P.rows(), tau, [&](double a) { trial_ = P + a * delta; },
+      [&](double a) { return sum_passes_cholesky_test(P, a, delta); },
       [&] {
         return lanczos_min_eig(L, inverse, tau,
                                [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) { w.noalias() = delta * u; });
@@ -766,7 +766,8 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
     trial_ = P;
     for (Eigen::Index i = 0; i < n; i += d) trial_.block(i, i, d, d) += a * D.middleRows(i, d).leftCols(d);
   };
-  return step(n, tau, form_trial, [&] {
+  const auto passes_at = [&](double a) { return block_sum_passes_cholesky_test(P, a, D, d); };
+  return step(n, tau, form_trial, passes_at, [&] {
     return lanczos_min_eig(L, inverse, tau, [&](const Eigen::VectorXd& u, Eigen::VectorXd& w) {
       w.resize(n);  // Δ u block by block
       for (Eigen::Index i = 0; i < n; i += d) w.segment(i, d).noalias() = D.middleRows(i, d).leftCols(d) * u.segment(i, d);
@@ -776,64 +777,132 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
 
 namespace {
 
-// A's Cholesky factorisation, left-looking on a P × P padded copy (n ≤ P, P a multiple of 8,
-// leading dimension P): column j is A's from its 8-row block on (zeros above row j and from row
-// n), less its multiples of the finished columns, four at a time, each update over whole 8-row
-// blocks to row P. Columns are copied only as they are reached, so a test that fails at pivot k
-// has read k columns. The factor goes to the lower triangle of *L when L is given (on success).
-// Against cholesky_lower's loops (n = 24 / 36 / 48, positive definite: 590 / 1260 / 2040 ns;
-// failing at the last pivot 592 / 1250 / 2140; at the middle one 300 / 560 / 870): 557 / 971 /
-// 1525, 550 / 960 / 1521 and 209 / 394 / 567 ns without the factor (BENCHMARKS.md, session 51).
-template <int P>
-bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
+// The padded kernels below read an n × n symmetric A by its columns: column(j) returns a function
+// whose value at i is A(i, j), called for j ≤ i < n only (the lower triangle), so that a sum such
+// as P + aΔ is formed in the kernel's own copy rather than into an n × n matrix first. They
+// factor A = W D⁻¹ Wᵀ (LDLᵀ with W = L D, no square roots in the chain from one pivot to the
+// next) on a P × P zero-padded copy on the stack (n ≤ P, P a multiple of 8, leading dimension P),
+// every update over whole 8-row blocks from the block that holds the column's diagonal; A is
+// positive definite when every pivot d_j is positive (and finite: an infinite pivot, whose
+// reciprocal is 0, would pass a matrix with an infinite entry).
+constexpr double kLargestPivot = std::numeric_limits<double>::max();
+
+// Column j of the padded copy, rows j & ~7 … P − 1: A's entries from row j to n − 1, zeros elsewhere.
+template <int P, class Entry>
+void load_padded_column(int n, int j, Entry entry, double* __restrict c) {
+  for (int i = j & ~7; i < P; ++i) c[i] = i >= j && i < n ? entry(i) : 0.0;
+}
+
+// The test right-looking: the whole copy first, then each pivot's rank-1 update of the columns
+// after it. A test that fails at pivot k has updated every column k times, where a left-looking
+// one has formed only k columns; against the left-looking kernel (P ≤ 32, positive definite or
+// failing at the last pivot: n = 8 / 12 / 16 / 24 / 32 61 / 115 / 165 / 297 / 523 ns against 123
+// / 173 / 274 / 440 / 711; failing at the middle pivot, n = 24 218 against 160; BENCHMARKS.md,
+// session 52). The grid's first tests mostly pass or fail near the boundary, at the last pivots.
+template <int P, class Column>
+bool padded_right_test(int n, Column column) {
   alignas(64) double l[P * P];
-  const int n = static_cast<int>(A.rows());
-  for (int j = 0; j < n; ++j) {
-    double* __restrict c = l + j * P;
-    const int from = j & ~7;
-    const double* a = &A(0, j);
-    for (int i = from; i < P; ++i) c[i] = i >= j && i < n ? a[i] : 0.0;
-    int k = 0;
-    for (; k + 3 < j; k += 4) {
-      const double *l0 = l + k * P, *l1 = l0 + P, *l2 = l1 + P, *l3 = l2 + P;
-      const double x0 = l0[j], x1 = l1[j], x2 = l2[j], x3 = l3[j];
-      for (int i = from; i < P; ++i) c[i] -= l0[i] * x0 + l1[i] * x1 + l2[i] * x2 + l3[i] * x3;
+  for (int j = 0; j < n; ++j) load_padded_column<P>(n, j, column(j), l + j * P);
+  for (int k = 0; k < n; ++k) {
+    const double* w = l + k * P;  // W's column k
+    const double pivot = w[k];
+    if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
+    const double reciprocal = 1.0 / pivot;
+    for (int j = k + 1; j < n; ++j) {
+      double* __restrict c = l + j * P;
+      const double x = w[j] * reciprocal;  // L(j, k)
+      for (int i = j & ~7; i < P; ++i) c[i] -= w[i] * x;
     }
-    for (; k < j; ++k) {
-      const double* l0 = l + k * P;
-      const double x0 = l0[j];
-      for (int i = from; i < P; ++i) c[i] -= l0[i] * x0;
-    }
-    const double pivot = c[j];
-    if (!(pivot > 0)) return false;
-    const double root = std::sqrt(pivot), scale = 1.0 / root;
-    for (int i = from; i < P; ++i) c[i] = i > j ? c[i] * scale : (i == j ? root : 0.0);
   }
-  if (L)
-    for (int j = 0; j < n; ++j) std::copy(l + j * P + j, l + j * P + n, &(*L)(j, j));
   return true;
 }
 
-// padded_left_cholesky at the smallest padded size (24, 32, 40 or 48) that holds A.
-bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
+// Left-looking: column j is A's, less its multiples of W's finished columns, four at a time, so
+// columns are formed only as they are reached and a test that fails at pivot k has read k
+// columns. With L given, A's Cholesky factor goes to its lower triangle on success (column j of
+// W scaled by 1/√d_j, after the last pivot, off the chain). Against the LLᵀ kernel it replaced
+// (n = 24 / 36 / 48, positive definite: 550 / 947 / 1477 ns; failing at the middle pivot 211 /
+// 395 / 573): 440 / 787 / 1297 and 160 / 300 / 460 ns (BENCHMARKS.md, session 52).
+template <int P, class Column>
+bool padded_left_ldlt(int n, Column column, Eigen::MatrixXd* L) {
+  alignas(64) double l[P * P];
+  alignas(64) double reciprocal[P];  // 1/d_k
+  for (int j = 0; j < n; ++j) {
+    double* __restrict c = l + j * P;
+    const int from = j & ~7;
+    load_padded_column<P>(n, j, column(j), c);
+    int k = 0;
+    for (; k + 3 < j; k += 4) {
+      const double *w0 = l + k * P, *w1 = w0 + P, *w2 = w1 + P, *w3 = w2 + P;
+      const double x0 = w0[j] * reciprocal[k], x1 = w1[j] * reciprocal[k + 1], x2 = w2[j] * reciprocal[k + 2],
+                   x3 = w3[j] * reciprocal[k + 3];
+      for (int i = from; i < P; ++i) c[i] -= w0[i] * x0 + w1[i] * x1 + w2[i] * x2 + w3[i] * x3;
+    }
+    for (; k < j; ++k) {
+      const double* w0 = l + k * P;
+      const double x0 = w0[j] * reciprocal[k];
+      for (int i = from; i < P; ++i) c[i] -= w0[i] * x0;
+    }
+    const double pivot = c[j];
+    if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
+    reciprocal[j] = 1.0 / pivot;
+    for (int i = from; i < j; ++i) c[i] = 0.0;  // (read by the later columns' updates)
+  }
+  if (L)
+    for (int j = 0; j < n; ++j) {
+      const double* w = l + j * P;
+      const double scale = std::sqrt(reciprocal[j]);  // 1/√d_j
+      for (int i = j; i < n; ++i) (*L)(i, j) = w[i] * scale;
+    }
+  return true;
+}
+
+// padded_left_ldlt at the smallest padded size (24, 32, 40 or 48) that holds n.
+template <class Column>
+bool padded_left_ldlt(Eigen::Index n, Column column, Eigen::MatrixXd* L) {
   static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
-  const Eigen::Index n = A.rows();
   eigen_assert(n <= 48);
-  if (n <= 24) return padded_left_cholesky<24>(A, L);
-  if (n <= 32) return padded_left_cholesky<32>(A, L);
-  if (n <= 40) return padded_left_cholesky<40>(A, L);
-  return padded_left_cholesky<48>(A, L);
+  const int size = static_cast<int>(n);
+  if (n <= 24) return padded_left_ldlt<24>(size, column, L);
+  if (n <= 32) return padded_left_ldlt<32>(size, column, L);
+  if (n <= 40) return padded_left_ldlt<40>(size, column, L);
+  return padded_left_ldlt<48>(size, column, L);
+}
+
+bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
+  return padded_left_ldlt(A.rows(), [&](int j) { return [a = &A(0, j)](int i) { return a[i]; }; }, L);
+}
+
+// The grid's test of the n × n matrix column gives (n ≤ kGridStepMaxSize): right-looking up to
+// kRightTestMaxSize rows, left-looking above, where its early failures save more (n = 36 / 48:
+// 756 / 1348 ns right-looking against 787 / 1297 when positive definite, 582 / 1054 against 300 /
+// 460 failing at the middle pivot).
+constexpr int kRightTestMaxSize = 32;
+template <class Column>
+bool padded_test(Eigen::Index n, Column column) {
+  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
+  eigen_assert(n <= 48);
+  const int size = static_cast<int>(n);
+  if (n <= 8) return padded_right_test<8>(size, column);
+  if (n <= 16) return padded_right_test<16>(size, column);
+  if (n <= 24) return padded_right_test<24>(size, column);
+  if (n <= kRightTestMaxSize) return padded_right_test<32>(size, column);
+  return padded_left_ldlt(n, column, nullptr);
 }
 
 }  // namespace
 
-bool passes_cholesky_test(const Eigen::MatrixXd& A, Eigen::MatrixXd& scratch) {
-  const Eigen::Index n = A.rows();
-  if (n < kPaddedTestMinSize || n > kGridStepMaxSize) {
-    scratch.resize(n, n);  // (cholesky_lower writes into an n × n L; a no-op when it already is)
-    return factor_lower(A, scratch);
-  }
-  return padded_left_cholesky(A, nullptr);
+bool sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& delta) {
+  return padded_test(P.rows(), [&](int j) {
+    return [p = &P(0, j), e = &delta(0, j), a](int i) { return p[i] + a * e[i]; };
+  });
+}
+
+bool block_sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& D, int d) {
+  return padded_test(P.rows(), [&](int j) {
+    const int block_end = (j / d + 1) * d;  // rows j … block_end − 1 of column j lie in Δ's block
+    return [p = &P(0, j), e = &D(0, j % d), a, block_end](int i) { return i < block_end ? p[i] + a * e[i] : p[i]; };
+  });
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
@@ -843,8 +912,6 @@ bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 }
 
 bool StepLength::positive_definite() { return factor_lower(trial_, trial_factor_); }
-
-bool StepLength::passes_test() { return passes_cholesky_test(trial_, trial_factor_); }
 
 void StepLength::take_tested(Eigen::MatrixXd& next, Eigen::MatrixXd& next_factor) {
   next.swap(trial_);

@@ -52,22 +52,24 @@ constexpr int kInverseLanczosMaxSize = 96;
 // (n = 24 / 32 / 48 / 64: 0.72 / 1.24 / 3.2 / 6.5 µs right-looking, 0.63 / 1.03 / 2.3 / 4.2 µs
 // left-looking; n = 16: 0.33 against 0.35; BENCHMARKS.md, session 27).
 constexpr Eigen::Index kColumnCholeskyMinSize = 24;
-// From this size to 48 rows cholesky_lower runs passes_cholesky_test's padded left-looking kernel
-// and copies the factor out: n = 28 / 36 / 48 took 809 / 1260 / 2210 ns by matrix–vector products,
-// 724 / 1030 / 1660 ns this way (at n = 24 617 against 587; BENCHMARKS.md, session 51).
+// From this size to 48 rows cholesky_lower runs a padded left-looking kernel (LDLᵀ, the factor
+// scaled out at the end): n = 28 / 36 / 48 took 809 / 1260 / 2210 ns by matrix–vector products,
+// 724 / 1030 / 1660 ns as LLᵀ this way (at n = 24 617 against 587; BENCHMARKS.md, session 51).
 constexpr Eigen::Index kPaddedFactorMinSize = 28;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
-// From this size up to kGridStepMaxSize rows passes_cholesky_test runs a padded left-looking test;
-// below it cholesky_lower's right-looking loops were faster on matrices that pass or fail late
-// (n = 16: 291 against 355 ns; at n = 20 403 against 440; BENCHMARKS.md, session 51).
-constexpr Eigen::Index kPaddedTestMinSize = 20;
-
-// Whether the symmetric A (n × n, lower triangle read) passes a Cholesky test (is positive
-// definite), without keeping the factor: the grid's first test of each step length, whose
-// factor is never used. From kPaddedTestMinSize to kGridStepMaxSize rows by a padded left-looking
-// kernel on the stack, otherwise factor_lower into scratch (then holding the factor, or stale).
-bool passes_cholesky_test(const Eigen::MatrixXd& A, Eigen::MatrixXd& scratch);
+// Whether P + a·Δ (P and Δ symmetric n × n, lower triangles read, n ≤ kGridStepMaxSize) is
+// positive definite, by the signs of its LDLᵀ pivots (all positive and finite): the grid's first
+// test of each step length, whose factor is never used. The kernel forms P + aΔ in its own padded
+// copy on the stack (right-looking up to 32 rows, left-looking above, where a test failing at
+// pivot k reads k columns of P and Δ), instead of into an n × n matrix first. Against that and
+// the LLᵀ tests (cholesky_lower's loops below 20 rows, a left-looking padded kernel from 20):
+// random full rank N = 8 / 12 77 / 159 → 71 / 151 µs in-process, and 0.91–0.95 of the time where
+// the interior point runs at N = 5 … 16 (sweep), iterations identical (BENCHMARKS.md, session 52).
+bool sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& delta);
+// The same for Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d, upper triangles of the
+// blocks not read).
+bool block_sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& D, int d);
 
 // The same by the kernel for A's size: cholesky_lower up to kGridStepMaxSize rows, Eigen's
 // (cholesky_in_place on a copy into L) above. The interior points' and dual scaling's factors
@@ -174,17 +176,17 @@ class StepLength {
 
  private:
   // full's and block_diagonal's step for n × n matrices: form_trial(a) writes P + aΔ into trial_,
-  // lowest_estimate() returns Lanczos's estimate of λ_min(L⁻¹ΔL⁻ᵀ) (read above kGridStepMaxSize
-  // only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for τ < 1 shrunk by
+  // passes_at(a) tests P + aΔ without forming it (sum_passes_cholesky_test or its block form; on
+  // the grid), lowest_estimate() returns Lanczos's estimate of λ_min(L⁻¹ΔL⁻ᵀ) (read above
+  // kGridStepMaxSize only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for τ < 1 shrunk by
   // 0.7 until P + αΔ passes a Cholesky test (shrink_until_passes: at most 30 tries, then 0).
-  template <class FormTrial, class LowestEstimate>
-  double step(Eigen::Index n, double tau, FormTrial form_trial, LowestEstimate lowest_estimate,
+  template <class FormTrial, class PassesAt, class LowestEstimate>
+  double step(Eigen::Index n, double tau, FormTrial form_trial, PassesAt passes_at, LowestEstimate lowest_estimate,
               bool factor_next = true);
   // The grid's step (kGridStepMaxSize); factor_next as full's.
-  template <class FormTrial>
-  double on_grid(double tau, FormTrial form_trial, bool factor_next);
+  template <class FormTrial, class PassesAt>
+  double on_grid(double tau, FormTrial form_trial, PassesAt passes_at, bool factor_next);
   bool positive_definite();  // Cholesky test of trial_, its factor into trial_factor_
-  bool passes_test();        // the same by passes_cholesky_test (trial_factor_ its scratch)
 
   Eigen::MatrixXd trial_;         // P + αΔ for the Cholesky test, n × n
   Eigen::MatrixXd trial_factor_;  // its factor in the lower triangle (cholesky_lower, or Eigen's
