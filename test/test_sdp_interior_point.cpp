@@ -1124,14 +1124,15 @@ TEST(SdpKernels, PositiveDefiniteWhenShiftedDecidesAtTheLowestEigenvalue) {
 // The grid's tests of P + aΔ (sum_passes_cholesky_test, and block_sum_passes_cholesky_test for
 // Δ = blkdiag(D), d = 1 and 2) decide as a Cholesky factorisation does, on both sides of the
 // boundary: P + aΔ = B + sI with s just above and just below −λ_min(B) (B symmetric indefinite),
-// for n = 1 … 48 (every padded size of the right-looking and the left-looking kernel); the upper
-// triangles of P, Δ and D's blocks are not read; a NaN entry or an infinite pivot fails.
+// for n = 1 … 48 (every padded size of the right-looking and the left-looking kernel); NaN in the
+// upper triangles of P, Δ and D's blocks changes nothing; a NaN entry below the diagonal or an
+// infinite pivot fails.
 TEST(SdpKernels, SumPassesCholeskyTestDecidesAtTheLowestEigenvalue) {
   using fact::sdp::detail::block_sum_passes_cholesky_test;
   using fact::sdp::detail::sum_passes_cholesky_test;
   std::mt19937 rng(37);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  const double a = 0.7, garbage = -1e3;
+  const double a = 0.7, garbage = std::numeric_limits<double>::quiet_NaN();
   for (Eigen::Index n = 1; n <= fact::sdp::detail::kGridStepMaxSize; ++n) {
     SCOPED_TRACE(testing::Message() << "n = " << n);
     const Eigen::MatrixXd G = fact::test::gaussian_matrix<Eigen::MatrixXd>(n, n, rng, gauss);

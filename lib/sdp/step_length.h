@@ -58,7 +58,7 @@ constexpr Eigen::Index kColumnCholeskyMinSize = 24;
 constexpr Eigen::Index kPaddedFactorMinSize = 28;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
-// Whether P + a·Δ (P and Δ symmetric n × n, lower triangles read, n ≤ kGridStepMaxSize) is
+// Whether P + a·Δ (P and Δ symmetric n × n, their lower triangles decide, n ≤ kGridStepMaxSize) is
 // positive definite, by the signs of its LDLᵀ pivots (all positive and finite): the grid's first
 // test of each step length, whose factor is never used. The kernel forms P + aΔ in its own padded
 // copy on the stack (right-looking up to 32 rows, left-looking above, where a test failing at
@@ -67,8 +67,8 @@ bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 // random full rank N = 8 / 12 77 / 159 → 71 / 151 µs in-process, and 0.91–0.95 of the time where
 // the interior point runs at N = 5 … 16 (sweep), iterations identical (BENCHMARKS.md, session 52).
 bool sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& delta);
-// The same for Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d, upper triangles of the
-// blocks not read).
+// The same for Δ = blkdiag(D), D the d × d diagonal blocks stacked (n × d, the blocks' lower
+// triangles decide).
 bool block_sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& D, int d);
 
 // The same by the kernel for A's size: cholesky_lower up to kGridStepMaxSize rows, Eigen's
