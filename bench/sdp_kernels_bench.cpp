@@ -1,7 +1,8 @@
 // fact-bench-sdp-kernels: the dense kernels under the SDP interior points, timed alone at each
 // size, real and complex: Cholesky, the inverse of a lower-triangular factor, its Gram matrix
 // L⁻ᴴ L⁻¹, a dense product (Eigen's; three real products when complex) and a product with a
-// triangular operand (multiply<Shape>). Each row also checks its kernel's result against a
+// triangular operand (multiply<Shape>); real, up to kGridStepMaxSize rows, also cholesky_lower and
+// the step-length grid's Cholesky tests (grid_rows). Each row also checks its kernel's result against a
 // reference and the run exits 1 when one is off, so a wrong kernel never gets a time.
 // Writes kernel,scalar,n,min_us,median_us,residual to --out.
 #include <CLI/CLI.hpp>
@@ -70,6 +71,40 @@ Matrix random_matrix(Eigen::Index rows, Eigen::Index cols, std::mt19937& rng) {
 
 double relative(double error, double scale) { return error / std::max(scale, 1e-300); }
 
+// The real interior point's small-size kernels (n ≤ kGridStepMaxSize): cholesky_lower (the factor
+// of the Schur complement and of X, Z) and the grid's test of P + aΔ (sum_passes_cholesky_test) on
+// a positive definite sum, one whose pivot fails at the middle row and one failing at the last:
+// A (positive definite, n × n) with A(k, k) lowered by twice its pivot there, 1/(A_k⁻¹)(k, k) for
+// A_k the leading (k + 1) × (k + 1) block (W = A⁻¹ for the last). A test's residual is 0 when it
+// decided right and 1 otherwise.
+template <class Add>
+void grid_rows(const Eigen::MatrixXd& A, const Eigen::MatrixXd& W, int reps, std::mt19937& rng, Add add) {
+  const Eigen::Index n = A.rows();
+  Eigen::MatrixXd L(n, n);  // A's factor, lower triangle
+  std::vector<double> us = time_calls(reps, [&] { sdp::cholesky_lower(A, L); });
+  const Eigen::MatrixXd lower = L.triangularView<Eigen::Lower>();
+  add("cholesky_lower", us, relative((lower * lower.transpose() - A).norm(), A.norm()));
+
+  const Eigen::MatrixXd H = random_matrix<Eigen::MatrixXd>(n, n, rng);
+  const Eigen::MatrixXd delta = H + H.transpose();  // Δ, n × n symmetric
+  const double a = 0.5;
+  const auto test_row = [&](const std::string& kernel, const Eigen::MatrixXd& sum, bool expected) {
+    const Eigen::MatrixXd P = sum - a * delta;  // P + aΔ = sum
+    bool passed = false;
+    us = time_calls(reps, [&] { passed = sdp::sum_passes_cholesky_test(P, a, delta); });
+    add(kernel, us, passed == expected ? 0.0 : 1.0);
+  };
+  test_row("grid_test_pass", A, true);
+  const Eigen::Index middle = n / 2;
+  const double middle_pivot = 1.0 / A.topLeftCorner(middle + 1, middle + 1).inverse()(middle, middle);
+  Eigen::MatrixXd failing = A;
+  failing(middle, middle) -= 2 * middle_pivot;
+  test_row("grid_test_fail_middle", failing, false);
+  failing = A;
+  failing(n - 1, n - 1) -= 2 / W(n - 1, n - 1);
+  test_row("grid_test_fail_last", failing, false);
+}
+
 // The rows of one scalar type (Matrix: Eigen::MatrixXd or Eigen::MatrixXcd) at size n.
 template <class Matrix>
 void kernel_rows(const std::string& scalar, int n, int reps, std::mt19937& rng, std::vector<Row>& rows) {
@@ -107,6 +142,8 @@ void kernel_rows(const std::string& scalar, int n, int reps, std::mt19937& rng, 
   if constexpr (Eigen::NumTraits<typename Matrix::Scalar>::IsComplex) {  // the reference for 3M
     us = time_calls(reps, [&] { C.noalias() = P * W; });
     add("eigen_complex_product", us, 0.0);
+  } else if (n <= sdp::kGridStepMaxSize) {
+    grid_rows(A, W, reps, rng, add);
   }
 }
 
