@@ -217,29 +217,12 @@ bool cholesky_lower_by_columns(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 }  // namespace
 
 namespace {
-bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L);  // (below)
+bool padded_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);  // (below)
 }  // namespace
 
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
-  const Eigen::Index n = A.rows();
-  if (n >= kPaddedFactorMinSize && n <= 48) return padded_left_cholesky(A, &L);
-  if (n >= kColumnCholeskyMinSize) return cholesky_lower_by_columns(A, L);
-  for (Eigen::Index j = 0; j < n; ++j)  // the lower triangle of A, column by column
-    std::copy(&A(j, j), &A(0, j) + n, &L(j, j));
-  for (Eigen::Index k = 0; k < n; ++k) {  // right-looking: column k, then the trailing columns
-    const double pivot = L(k, k);
-    if (!(pivot > 0)) return false;
-    const double root = std::sqrt(pivot);
-    double* __restrict lk = &L(0, k);
-    lk[k] = root;
-    for (Eigen::Index i = k + 1; i < n; ++i) lk[i] /= root;
-    for (Eigen::Index j = k + 1; j < n; ++j) {
-      double* __restrict lj = &L(0, j);
-      const double factor = lk[j];
-      for (Eigen::Index i = j; i < n; ++i) lj[i] -= lk[i] * factor;
-    }
-  }
-  return true;
+  if (A.rows() <= kPaddedCholeskyMaxSize) return padded_cholesky(A, L);
+  return cholesky_lower_by_columns(A, L);
 }
 
 bool complex_cholesky_by_loops(Eigen::Ref<Eigen::MatrixXcd, 0, Eigen::OuterStride<>> A) {
@@ -787,38 +770,58 @@ namespace {
 // reciprocal is 0, would pass a matrix with an infinite entry).
 constexpr double kLargestPivot = std::numeric_limits<double>::max();
 
+// A's Cholesky factor from W and 1/d into the lower triangle of L (n × n): column j of W scaled
+// by 1/√d_j, computed after the last pivot, off the chain from pivot to pivot.
+template <int P>
+void scale_out_factor(int n, const double* l, const double* reciprocal, Eigen::MatrixXd& L) {
+  for (int j = 0; j < n; ++j) {
+    const double* w = l + j * P;
+    const double scale = std::sqrt(reciprocal[j]);  // 1/√d_j
+    double* __restrict out = &L(0, j);
+    for (int i = j; i < n; ++i) out[i] = w[i] * scale;
+  }
+}
+
 // Column j of the padded copy, rows j & ~7 … P − 1: A's entries from row j to n − 1, zeros elsewhere.
 template <int P, class Entry>
 void load_padded_column(int n, int j, Entry entry, double* __restrict c) {
   for (int i = j & ~7; i < P; ++i) c[i] = i >= j && i < n ? entry(i) : 0.0;
 }
 
-// The test right-looking: the whole copy first, then each pivot's rank-1 update of the columns
-// after it. Its copy takes whole columns, so column(j)'s function is also called above the
-// diagonal; those entries reach only rows above the diagonal, never a pivot. A test that fails at pivot k has updated every column k times, where a left-looking
-// one has formed only k columns; against the left-looking kernel (P ≤ 32, positive definite or
-// failing at the last pivot: n = 8 / 12 / 16 / 24 / 32 61 / 115 / 165 / 297 / 523 ns against 123
+// Right-looking: the whole copy first, then each pivot's rank-1 update of the columns after it.
+// A test (L null) copies whole columns, so column(j)'s function is also called above the
+// diagonal; those entries reach only rows above the diagonal, never a pivot. With L given, A's
+// Cholesky factor goes to its lower triangle on success. A test that fails at pivot k has updated
+// every column k times, where a left-looking one has formed only k columns; against the
+// left-looking kernel (P ≤ 32, positive definite or failing at the last pivot: n = 8 / 12 / 16 / 24 / 32 61 / 115 / 165 / 297 / 523 ns against 123
 // / 173 / 274 / 440 / 711; failing at the middle pivot, n = 24 218 against 160; BENCHMARKS.md,
 // session 52). The grid's first tests mostly pass or fail near the boundary, at the last pivots.
 template <int P, class Column>
-bool padded_right_test(int n, Column column) {
+bool padded_right_ldlt(int n, Column column, Eigen::MatrixXd* L) {
   alignas(64) double l[P * P];
-  for (int j = 0; j < n; ++j) {  // whole columns (faster than from row j & ~7: N = 8 … 16 0.96–0.97)
-    const auto entry = column(j);
-    double* __restrict c = l + j * P;
-    for (int i = 0; i < P; ++i) c[i] = i < n ? entry(i) : 0.0;
+  alignas(64) double reciprocal[P];  // 1/d_k
+  for (int j = 0; j < n; ++j) {
+    if (L) {  // (cholesky_lower reads A's lower triangle only: whole columns took random C of rank 3
+              // at N = 5 4 % longer, whatever its callers leave above the diagonal)
+      load_padded_column<P>(n, j, column(j), l + j * P);
+    } else {  // the grid's P and Δ, whole columns (faster than from row j & ~7: N = 8 … 16 0.96–0.97)
+      const auto entry = column(j);
+      double* __restrict c = l + j * P;
+      for (int i = 0; i < P; ++i) c[i] = i < n ? entry(i) : 0.0;
+    }
   }
   for (int k = 0; k < n; ++k) {
     const double* w = l + k * P;  // W's column k
     const double pivot = w[k];
     if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
-    const double reciprocal = 1.0 / pivot;
+    reciprocal[k] = 1.0 / pivot;
     for (int j = k + 1; j < n; ++j) {
       double* __restrict c = l + j * P;
-      const double x = w[j] * reciprocal;  // L(j, k)
+      const double x = w[j] * reciprocal[k];  // L(j, k)
       for (int i = j & ~7; i < P; ++i) c[i] -= w[i] * x;
     }
   }
+  if (L) scale_out_factor<P>(n, l, reciprocal, *L);
   return true;
 }
 
@@ -853,61 +856,46 @@ bool padded_left_ldlt(int n, Column column, Eigen::MatrixXd* L) {
     reciprocal[j] = 1.0 / pivot;
     for (int i = from; i < j; ++i) c[i] = 0.0;  // (read by the later columns' updates)
   }
-  if (L)
-    for (int j = 0; j < n; ++j) {
-      const double* w = l + j * P;
-      const double scale = std::sqrt(reciprocal[j]);  // 1/√d_j
-      for (int i = j; i < n; ++i) (*L)(i, j) = w[i] * scale;
-    }
+  if (L) scale_out_factor<P>(n, l, reciprocal, *L);
   return true;
 }
 
-// padded_left_ldlt at the smallest padded size (24, 32, 40 or 48) that holds n.
+// The padded kernel for n ≤ 48 rows, at the smallest padded size that holds n: right-looking up
+// to kRightLdltMaxSize rows, left-looking above, where its early failures save more (n = 36 / 48:
+// 756 / 1348 ns right-looking against 787 / 1297 when positive definite, 582 / 1054 against 300 /
+// 460 failing at the middle pivot; BENCHMARKS.md, session 52). The grid's tests (L null) and
+// cholesky_lower (the factor into L).
+constexpr int kRightLdltMaxSize = 32;
 template <class Column>
-bool padded_left_ldlt(Eigen::Index n, Column column, Eigen::MatrixXd* L) {
+bool padded_ldlt(Eigen::Index n, Column column, Eigen::MatrixXd* L) {
   static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
   eigen_assert(n <= 48);
   const int size = static_cast<int>(n);
-  if (n <= 24) return padded_left_ldlt<24>(size, column, L);
-  if (n <= 32) return padded_left_ldlt<32>(size, column, L);
+  if (n <= 8) return padded_right_ldlt<8>(size, column, L);
+  if (n <= 16) return padded_right_ldlt<16>(size, column, L);
+  if (n <= 24) return padded_right_ldlt<24>(size, column, L);
+  if (n <= kRightLdltMaxSize) return padded_right_ldlt<32>(size, column, L);
   if (n <= 40) return padded_left_ldlt<40>(size, column, L);
   return padded_left_ldlt<48>(size, column, L);
 }
 
-bool padded_left_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd* L) {
-  return padded_left_ldlt(A.rows(), [&](int j) { return [a = &A(0, j)](int i) { return a[i]; }; }, L);
-}
-
-// The grid's test of the n × n matrix column gives (n ≤ kGridStepMaxSize): right-looking up to
-// kRightTestMaxSize rows, left-looking above, where its early failures save more (n = 36 / 48:
-// 756 / 1348 ns right-looking against 787 / 1297 when positive definite, 582 / 1054 against 300 /
-// 460 failing at the middle pivot).
-constexpr int kRightTestMaxSize = 32;
-template <class Column>
-bool padded_test(Eigen::Index n, Column column) {
-  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
-  eigen_assert(n <= 48);
-  const int size = static_cast<int>(n);
-  if (n <= 8) return padded_right_test<8>(size, column);
-  if (n <= 16) return padded_right_test<16>(size, column);
-  if (n <= 24) return padded_right_test<24>(size, column);
-  if (n <= kRightTestMaxSize) return padded_right_test<32>(size, column);
-  return padded_left_ldlt(n, column, nullptr);
+bool padded_cholesky(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
+  return padded_ldlt(A.rows(), [&](int j) { return [a = &A(0, j)](int i) { return a[i]; }; }, &L);
 }
 
 }  // namespace
 
 bool sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& delta) {
-  return padded_test(P.rows(), [&](int j) {
+  return padded_ldlt(P.rows(), [&](int j) {
     return [p = &P(0, j), e = &delta(0, j), a](int i) { return p[i] + a * e[i]; };
-  });
+  }, nullptr);
 }
 
 bool block_sum_passes_cholesky_test(const Eigen::MatrixXd& P, double a, const Eigen::MatrixXd& D, int d) {
-  return padded_test(P.rows(), [&](int j) {
+  return padded_ldlt(P.rows(), [&](int j) {
     const int block_end = (j / d + 1) * d;  // rows j … block_end − 1 of column j lie in Δ's block
     return [p = &P(0, j), e = &D(0, j % d), a, block_end](int i) { return i < block_end ? p[i] + a * e[i] : p[i]; };
-  });
+  }, nullptr);
 }
 
 bool factor_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {

@@ -46,16 +46,15 @@ constexpr double kCorrectorStepRatio = 0.95;
 constexpr int kInverseLanczosMaxSize = 96;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
-// (n × n, upper triangle untouched); false when A is not positive definite. Plain loops for
-// the small sizes of the grid's tests, where Eigen's LLT spends most of its time on overhead:
-// right-looking below kColumnCholeskyMinSize, left-looking by matrix–vector products from it
-// (n = 24 / 32 / 48 / 64: 0.72 / 1.24 / 3.2 / 6.5 µs right-looking, 0.63 / 1.03 / 2.3 / 4.2 µs
-// left-looking; n = 16: 0.33 against 0.35; BENCHMARKS.md, session 27).
-constexpr Eigen::Index kColumnCholeskyMinSize = 24;
-// From this size to 48 rows cholesky_lower runs a padded left-looking kernel (LDLᵀ, the factor
-// scaled out at the end): n = 28 / 36 / 48 took 809 / 1260 / 2210 ns by matrix–vector products,
-// 724 / 1030 / 1660 ns as LLᵀ this way (at n = 24 617 against 587; BENCHMARKS.md, session 51).
-constexpr Eigen::Index kPaddedFactorMinSize = 28;
+// (n × n, upper triangle untouched); false when A is not positive definite or a pivot is not
+// finite. Up to kPaddedCholeskyMaxSize rows the grid tests' padded LDLᵀ kernels (right-looking
+// up to 32 rows, left-looking above; the factor scaled out at the end), above it left-looking by
+// matrix–vector products. Eigen's LLT spends most of its time at these sizes on overhead. Against
+// session 51's kernels (right-looking loops below 24 rows, matrix–vector products at 24 … 27, a
+// padded left-looking LLᵀ from 28): n = 8 / 12 / 16 / 24 / 32 108 / 185 / 309 / 581 / 762 → 75 /
+// 123 / 185 / 385 / 682 ns, at 36 / 48 even; random C of rank 3 at N = 5 (16 factorisations of
+// the 18-unknown Newton system) 58.7 → 56.2 µs (BENCHMARKS.md, session 52).
+constexpr Eigen::Index kPaddedCholeskyMaxSize = 48;
 bool cholesky_lower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L);
 
 // Whether P + a·Δ (P and Δ symmetric n × n, their lower triangles decide, n ≤ kGridStepMaxSize) is
