@@ -761,8 +761,8 @@ double StepLength::block_diagonal(const Eigen::MatrixXd& P, const Eigen::MatrixX
 namespace {
 
 // The padded kernels below read an n × n symmetric A by its columns: column(j) returns a function
-// whose value at i is A(i, j), for 0 ≤ i < n (only the lower triangle's, j ≤ i, decide), so that a sum such
-// as P + aΔ is formed in the kernel's own copy rather than into an n × n matrix first. They
+// whose value at i is A(i, j), for 0 ≤ i < n (only the lower triangle's, j ≤ i, decide), so that a
+// sum such as P + aΔ is formed in the kernel's own copy rather than into an n × n matrix first. They
 // factor A = W D⁻¹ Wᵀ (LDLᵀ with W = L D, no square roots in the chain from one pivot to the
 // next) on a P × P zero-padded copy on the stack (n ≤ P, P a multiple of 8, leading dimension P),
 // every update over whole 8-row blocks from the block that holds the column's diagonal; A is
@@ -793,9 +793,10 @@ void load_padded_column(int n, int j, Entry entry, double* __restrict c) {
 // diagonal; those entries reach only rows above the diagonal, never a pivot. With L given, A's
 // Cholesky factor goes to its lower triangle on success. A test that fails at pivot k has updated
 // every column k times, where a left-looking one has formed only k columns; against the
-// left-looking kernel (P ≤ 32, positive definite or failing at the last pivot: n = 8 / 12 / 16 / 24 / 32 61 / 115 / 165 / 297 / 523 ns against 123
-// / 173 / 274 / 440 / 711; failing at the middle pivot, n = 24 218 against 160; BENCHMARKS.md,
-// session 52). The grid's first tests mostly pass or fail near the boundary, at the last pivots.
+// left-looking kernel (P ≤ 32, positive definite or failing at the last pivot: n = 8 / 12 / 16 /
+// 24 / 32 61 / 115 / 165 / 297 / 523 ns against 123 / 173 / 274 / 440 / 711; failing at the middle
+// pivot, n = 24 218 against 160; BENCHMARKS.md, session 52). The grid's first tests mostly pass or
+// fail near the boundary, at the last pivots.
 template <int P, class Column>
 bool padded_right_ldlt(int n, Column column, Eigen::MatrixXd* L) {
   alignas(64) double l[P * P];

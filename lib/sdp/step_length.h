@@ -177,8 +177,9 @@ class StepLength {
   // full's and block_diagonal's step for n × n matrices: form_trial(a) writes P + aΔ into trial_,
   // passes_at(a) tests P + aΔ without forming it (sum_passes_cholesky_test or its block form; on
   // the grid), lowest_estimate() returns Lanczos's estimate of λ_min(L⁻¹ΔL⁻ᵀ) (read above
-  // kGridStepMaxSize only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for τ < 1 shrunk by
-  // 0.7 until P + αΔ passes a Cholesky test (shrink_until_passes: at most 30 tries, then 0).
+  // kGridStepMaxSize only). Up to kGridStepMaxSize rows on_grid; above, min(1, τ/|estimate|), for
+  // τ < 1 shrunk by 0.7 until P + αΔ passes a Cholesky test (shrink_until_passes: at most 30
+  // tries, then 0).
   template <class FormTrial, class PassesAt, class LowestEstimate>
   double step(Eigen::Index n, double tau, FormTrial form_trial, PassesAt passes_at, LowestEstimate lowest_estimate,
               bool factor_next = true);
