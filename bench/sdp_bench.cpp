@@ -43,7 +43,7 @@ double paper_mosek_seconds(int drones) {
 struct Args {
   int max_n = 200;
   int reps = 3;
-  int peer_max_n = 100;
+  int peer_max_n = 200;  // every size of the table (N = 200 adds about a minute)
   bool peers = true;
   bool quick = false;  // --quick: max_n at most 16, applied after all flags
   bool stages = false;  // --stages: each row's methods (Result::stages) under it
@@ -58,7 +58,7 @@ void print_usage(std::ostream& os) {
         "  --reps R        repetitions per solver; times are medians (default 3)\n"
         "  --out FILE      CSV output (default bench/results/sdp.csv, folders are created)\n"
         "  --no-peers      time fact::sdp::solve only\n"
-        "  --peer-max-n N  run SDPA/CSDP only up to this N (default 100); larger shows '-'\n"
+        "  --peer-max-n N  run SDPA/CSDP only up to this N (default 200); larger shows '-'\n"
         "  --stages        under each row, the methods our solve ran: iterations, ms (of the\n"
         "                  last repetition) and how each ended\n"
         "For steady peer timings run with OPENBLAS_NUM_THREADS=1.\n";
