@@ -1003,8 +1003,8 @@ TEST(SdpKernels, CentringIsThePowerOfTheRatioClampedToTheUnitInterval) {
 }
 
 // SpdSolver on each of its paths (L D Lᵀ to 12 rows, padded to 4, 8 or 12; cholesky_lower to 64
-// rows, right-looking below 24, by columns from 24, on a padded copy from 28 to 48 (each padded
-// size) and by columns again above; Eigen's blocked kernel in place above; and
+// rows: the padded L D Lᵀ kernels to 48 (right-looking padded to 16, 24 and 32, left-looking to 40
+// and 48) and by columns above; Eigen's blocked kernel in place above; and
 // back, so that a smaller L D Lᵀ system follows a larger one in the same padding and in another):
 // x = A⁻¹ b for A = B Bᵀ + n I, with x aliasing b, and the same x with A's strict upper triangle
 // NaN (only the lower one is read); false and a NaN solution for an indefinite A, one whose every
@@ -1094,7 +1094,7 @@ void expect_cholesky_on_every_path(std::mt19937& rng) {
   }
 }
 
-// positive_definite_when_shifted on its paths (real: cholesky_lower's loops up to 48 rows,
+// positive_definite_when_shifted on its paths (real: cholesky_lower's padded kernels up to 48 rows,
 // cholesky_in_place above; complex: cholesky_in_place): S + t·I passes just above t = −λ_min(S)
 // and fails just below it, for an indefinite S; an infinite or NaN diagonal entry fails.
 TEST(SdpKernels, PositiveDefiniteWhenShiftedDecidesAtTheLowestEigenvalue) {
