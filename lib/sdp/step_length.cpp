@@ -855,7 +855,8 @@ bool padded_left_ldlt(int n, Column column, Eigen::MatrixXd* L) {
     const double pivot = c[j];
     if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
     reciprocal[j] = 1.0 / pivot;
-    for (int i = from; i < j; ++i) c[i] = 0.0;  // (read by the later columns' updates)
+    for (int i = from; i < j; ++i) c[i] = 0.0;  // (above the diagonal: the later columns' updates
+                                                // read these rows only into their own rows above it)
   }
   if (L) scale_out_factor<P>(n, l, reciprocal, *L);
   return true;

@@ -46,8 +46,8 @@ constexpr double kCorrectorStepRatio = 0.95;
 constexpr int kInverseLanczosMaxSize = 96;
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
-// (n × n, upper triangle untouched); false when A is not positive definite or a pivot is not
-// finite. Up to kPaddedCholeskyMaxSize rows the grid tests' padded LDLᵀ kernels (right-looking
+// (n × n, upper triangle untouched); false when A is not positive definite (up to
+// kPaddedCholeskyMaxSize rows also when a pivot is not finite). Up to kPaddedCholeskyMaxSize rows the grid tests' padded LDLᵀ kernels (right-looking
 // up to 32 rows, left-looking above; the factor scaled out at the end), above it left-looking by
 // matrix–vector products. Eigen's LLT spends most of its time at these sizes on overhead. Against
 // session 51's kernels (right-looking loops below 24 rows, matrix–vector products at 24 … 27, a
