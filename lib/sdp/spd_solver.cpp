@@ -13,10 +13,6 @@ SpdSolver::SpdSolver(Eigen::Index n) : L_(n, n) {}
 
 namespace {
 
-// A pivot that L D Lᵀ accepts: positive and finite (an infinite one would leave D⁻¹ = 0 and a
-// finite x; the loops path takes it, session 48's review).
-bool usable_pivot(double pivot) { return pivot > 0 && pivot <= std::numeric_limits<double>::max(); }
-
 // A = L D Lᵀ (A n × n, n ≤ P, lower triangle read) into a (P × P, column-major, leading dimension
 // P), right-looking two columns at a time: column k + 1 takes column k's multiple off, then both
 // columns' multiples come off the trailing columns in one pass (n = 5 / 10 / 12: 36 / 124 / 170

@@ -449,8 +449,7 @@ bool inverse_by_padded_sweeps(const Matrix& A, double shift, Matrix& W) {
   alignas(64) double column_im[kComplex ? P : 1];
   for (int k = 0; k < n; ++k) {
     const double pivot = re[k * P + k];
-    // (an infinite pivot would leave a zero reciprocal and a finite-looking W, as for SpdSolver)
-    if (!(pivot > 0 && pivot <= std::numeric_limits<double>::max())) return false;
+    if (!usable_pivot(pivot)) return false;
     const double reciprocal = 1.0 / pivot;
     for (int i = 0; i < P; ++i) column_re[i] = re[k * P + i];
     column_re[k] = 0.0;
@@ -766,9 +765,7 @@ namespace {
 // factor A = W D⁻¹ Wᵀ (LDLᵀ with W = L D, no square roots in the chain from one pivot to the
 // next) on a P × P zero-padded copy on the stack (n ≤ P, P a multiple of 8, leading dimension P),
 // every update over whole 8-row blocks from the block that holds the column's diagonal; A is
-// positive definite when every pivot d_j is positive (and finite: an infinite pivot, whose
-// reciprocal is 0, would pass a matrix with an infinite entry).
-constexpr double kLargestPivot = std::numeric_limits<double>::max();
+// positive definite when every pivot d_j is positive (and finite: usable_pivot).
 
 // A's Cholesky factor from W and 1/d into the lower triangle of L (n × n): column j of W scaled
 // by 1/√d_j, computed after the last pivot, off the chain from pivot to pivot.
@@ -814,7 +811,7 @@ bool padded_right_ldlt(int n, Column column, Eigen::MatrixXd* L) {
   for (int k = 0; k < n; ++k) {
     const double* w = l + k * P;  // W's column k
     const double pivot = w[k];
-    if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
+    if (!usable_pivot(pivot)) return false;
     reciprocal[k] = 1.0 / pivot;
     for (int j = k + 1; j < n; ++j) {
       double* __restrict c = l + j * P;
@@ -853,7 +850,7 @@ bool padded_left_ldlt(int n, Column column, Eigen::MatrixXd* L) {
       for (int i = from; i < P; ++i) c[i] -= w0[i] * x0;
     }
     const double pivot = c[j];
-    if (!(pivot > 0 && pivot <= kLargestPivot)) return false;
+    if (!usable_pivot(pivot)) return false;
     reciprocal[j] = 1.0 / pivot;
     for (int i = from; i < j; ++i) c[i] = 0.0;  // (above the diagonal: the later columns' updates
                                                 // read these rows only into their own rows above it)
@@ -870,7 +867,7 @@ bool padded_left_ldlt(int n, Column column, Eigen::MatrixXd* L) {
 constexpr int kRightLdltMaxSize = 32;
 template <class Column>
 bool padded_ldlt(Eigen::Index n, Column column, Eigen::MatrixXd* L) {
-  static_assert(kGridStepMaxSize <= 48, "a padded copy larger than P = 48");
+  static_assert(kGridStepMaxSize <= 48 && kPaddedCholeskyMaxSize <= 48, "a padded copy larger than P = 48");
   eigen_assert(n <= 48);
   const int size = static_cast<int>(n);
   if (n <= 8) return padded_right_ldlt<8>(size, column, L);

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -44,6 +45,12 @@ constexpr double kCorrectorStepRatio = 0.95;
 // 64 (n = 64 … 128) took 0.90 / 0.93 / 0.98 / 1.02 of the time with a limit of 128 (BENCHMARKS.md,
 // session 26).
 constexpr int kInverseLanczosMaxSize = 96;
+
+// A pivot that an L D Lᵀ factorisation or a Gauss–Jordan sweep accepts: positive and finite. An
+// infinite one leaves a zero reciprocal, and with it a finite-looking factor, inverse or solution
+// for a matrix with an infinite entry (session 48's review of SpdSolver). SpdSolver's L D Lᵀ, the
+// padded kernels of cholesky_lower and the grid's tests, and inverse_by_sweeps.
+inline bool usable_pivot(double pivot) { return pivot > 0 && pivot <= std::numeric_limits<double>::max(); }
 
 // A = L Lᵀ for the symmetric A (n × n, lower triangle read) into the lower triangle of L
 // (n × n, upper triangle untouched); false when A is not positive definite (up to
